@@ -1,0 +1,53 @@
+// Feature extraction into caller buffers. Features are written in window
+// coordinates (column, row inside the ImageWindow), in raster order, at most
+// out.size() of them; the rest are counted as dropped, never written.
+//
+// Detectors:
+//  - binary: a pixel is a feature when it is non-zero;
+//  - gradient rows (the thesis's fast edge detector): the gradient magnitude
+//    m = |gx| + |gy| of the 3x3 Sobel operator is thresholded (m >= threshold,
+//    threshold >= 1), and of each run of contiguous above-threshold pixels on
+//    a row only the strongest is kept (the leftmost on ties). Pixels on the
+//    image border have no full neighbourhood and are never features; runs are
+//    cut at the window's edges.
+// Neither needs scratch memory.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <span>
+
+#include "gabarit/image_view.hpp"
+#include "gabarit/roi_point.hpp"
+#include "gabarit/status.hpp"
+#include "gabarit/table_format.hpp"
+
+namespace gabarit {
+
+// Capacity that can never overflow: one feature per window pixel.
+constexpr std::size_t feature_capacity(std::uint16_t window_width, std::uint16_t window_height) noexcept {
+  return std::size_t{window_width} * window_height;
+}
+
+struct FeatureCount {
+  std::uint32_t written = 0;
+  std::uint32_t dropped = 0;  // features found beyond out.size()
+};
+
+// Largest gradient magnitude the Sobel L1 norm can produce on 8-bit images.
+inline constexpr std::uint16_t kMaxGradientMagnitude = 2040;
+
+// Sobel |gx| + |gy| at (x, y); 0 on the image border. Precondition: image.valid(), x < width, y < height.
+std::uint16_t gradient_magnitude(const ImageView& image, std::uint32_t x, std::uint32_t y) noexcept;
+
+Status extract_binary(const ImageView& image, const ImageWindow& window, std::span<RoiPoint> out,
+                      FeatureCount& count) noexcept;
+
+Status extract_gradient_rows(const ImageView& image, const ImageWindow& window, std::uint16_t threshold,
+                             std::span<RoiPoint> out, FeatureCount& count) noexcept;
+
+// Dispatches on the detector recorded in a table.
+Status extract_features(const ImageView& image, const ImageWindow& window, table_format::DetectorKind kind,
+                        std::uint16_t threshold, std::span<RoiPoint> out, FeatureCount& count) noexcept;
+
+}  // namespace gabarit

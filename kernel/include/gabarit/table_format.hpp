@@ -1,0 +1,93 @@
+// Byte layout of a gabarit table, version 1. The prose specification is
+// docs/table-format.md; these constants are the single source both the kernel
+// (reader) and the host table builder (writer) use, so the two cannot drift.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+namespace gabarit::table_format {
+
+inline constexpr char kMagic[8] = {'G', 'B', 'R', 'T', 'L', 'U', 'T', '\0'};
+inline constexpr std::uint16_t kVersionMajor = 1;
+inline constexpr std::uint16_t kVersionMinor = 0;
+
+inline constexpr std::uint32_t kHeaderBytes = 160;
+inline constexpr std::uint32_t kCellDescriptorBytes = 32;
+inline constexpr std::uint32_t kModelPointBytes = 4;  // int16 x, int16 y
+inline constexpr std::uint32_t kSectionAlignment = 8;
+
+// Limits that keep every size computation inside 32 bits and every counter
+// comparison inside 64 bits; a header above them is rejected as kCountTooLarge.
+inline constexpr std::uint32_t kMaxCells = 1u << 24;
+inline constexpr std::uint32_t kMaxRoiPixels = 1u << 24;
+inline constexpr std::uint32_t kMaxReferences = 1u << 28;
+inline constexpr std::uint32_t kMaxModelPoints = 1u << 20;
+inline constexpr std::uint32_t kMaxDepths = 4096;
+
+// Header field offsets (bytes from the start of the table).
+namespace offset {
+inline constexpr std::size_t kMagic = 0;               // char[8]
+inline constexpr std::size_t kVersionMajor = 8;        // u16
+inline constexpr std::size_t kVersionMinor = 10;       // u16
+inline constexpr std::size_t kHeaderBytes = 12;        // u32 = 160
+inline constexpr std::size_t kFileBytes = 16;          // u32, whole table
+inline constexpr std::size_t kCrc32 = 20;              // u32 over bytes [24, file_bytes)
+inline constexpr std::size_t kFlags = 24;              // u32, must be 0 in v1.0
+inline constexpr std::size_t kCellCount = 28;          // u32
+inline constexpr std::size_t kReferenceCount = 32;     // u32
+inline constexpr std::size_t kRoiWidth = 36;           // u16
+inline constexpr std::size_t kRoiHeight = 38;          // u16
+inline constexpr std::size_t kRoiOriginX = 40;         // i16, x of ROI column 0 relative to the ROI centre
+inline constexpr std::size_t kRoiOriginY = 42;         // i16
+inline constexpr std::size_t kReferenceBytes = 44;     // u8: 1, 2 or 4 (narrowest that fits)
+inline constexpr std::size_t kDetectorKind = 45;       // u8: DetectorKind
+inline constexpr std::size_t kDetectorThreshold = 46;  // u16
+inline constexpr std::size_t kMaxStencilSize = 48;     // u32
+inline constexpr std::size_t kModelPointCount = 52;    // u32, all depths
+inline constexpr std::size_t kDepthCount = 56;         // u16
+inline constexpr std::size_t kReserved58 = 58;         // u16, must be 0
+inline constexpr std::size_t kAxisX = 60;              // f32 min, f32 max, u32 cells
+inline constexpr std::size_t kAxisY = 72;
+inline constexpr std::size_t kAxisTheta = 84;          // degrees
+inline constexpr std::size_t kKeepRatio = 96;          // f32
+inline constexpr std::size_t kModelRefX = 100;         // f32, reference point in model-image pixels
+inline constexpr std::size_t kModelRefY = 104;         // f32
+inline constexpr std::size_t kModelWidth = 108;        // u16, model image size (0 for point models)
+inline constexpr std::size_t kModelHeight = 110;       // u16
+inline constexpr std::size_t kSeed = 112;              // u64
+inline constexpr std::size_t kCellsOffset = 120;       // u32
+inline constexpr std::size_t kPixelOffsetsOffset = 124;  // u32
+inline constexpr std::size_t kReferencesOffset = 128;  // u32
+inline constexpr std::size_t kModelCountsOffset = 132; // u32: depth_count x u32
+inline constexpr std::size_t kModelPointsOffset = 136; // u32: model_point_count x (i16, i16)
+inline constexpr std::size_t kReserved140 = 140;       // 20 bytes, must be 0
+}  // namespace offset
+
+// Cell descriptor field offsets (bytes from the start of the descriptor).
+namespace cell_offset {
+inline constexpr std::size_t kXLo = 0;    // f32, translation bounds in pixels
+inline constexpr std::size_t kXHi = 4;
+inline constexpr std::size_t kYLo = 8;
+inline constexpr std::size_t kYHi = 12;
+inline constexpr std::size_t kThetaLo = 16;  // f32, degrees
+inline constexpr std::size_t kThetaHi = 20;
+inline constexpr std::size_t kDepth = 24;    // u16, focus-stack index
+inline constexpr std::size_t kReserved = 26; // u16, must be 0
+inline constexpr std::size_t kStencilSize = 28;  // u32, pixels in the (decimated) stencil
+}  // namespace cell_offset
+
+enum class DetectorKind : std::uint8_t {
+  kBinary = 0,        // any non-zero pixel is a feature
+  kGradientRows = 1,  // Sobel |gx|+|gy| >= threshold, strongest of each run along a row
+};
+
+constexpr std::uint32_t align_up(std::uint32_t n) noexcept {
+  return (n + (kSectionAlignment - 1)) & ~(kSectionAlignment - 1);
+}
+
+constexpr std::uint8_t narrowest_reference_bytes(std::uint32_t cell_count) noexcept {
+  return cell_count <= 0x100u ? 1 : (cell_count <= 0x10000u ? 2 : 4);
+}
+
+}  // namespace gabarit::table_format

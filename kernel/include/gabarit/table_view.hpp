@@ -1,0 +1,130 @@
+// A validated, zero-copy view of a gabarit table held in any byte buffer: a
+// file mapped by Linux or a const array in MCU flash. open() checks every
+// structural promise once (header, version, sizes, CRC-32, monotonic offsets,
+// references in range and strictly increasing per pixel); after that the
+// accessors and the voter's hot loop read without further checks.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <span>
+
+#include "gabarit/byte_order.hpp"
+#include "gabarit/status.hpp"
+#include "gabarit/table_format.hpp"
+
+namespace gabarit {
+
+// One axis of the state space: `cells` cells whose centres run evenly from
+// min to max (min == max when cells == 1).
+struct Axis {
+  float min = 0;
+  float max = 0;
+  std::uint32_t cells = 1;
+};
+
+// A cell of the state space: [x_lo,x_hi] x [y_lo,y_hi] x [theta_lo,theta_hi] x {depth}.
+struct CellBounds {
+  float x_lo = 0, x_hi = 0;
+  float y_lo = 0, y_hi = 0;
+  float theta_lo_deg = 0, theta_hi_deg = 0;
+  std::uint16_t depth = 0;
+  std::uint32_t stencil_size = 0;
+
+  float x_centre() const noexcept { return (x_lo + x_hi) * 0.5f; }
+  float y_centre() const noexcept { return (y_lo + y_hi) * 0.5f; }
+  float theta_centre_deg() const noexcept { return (theta_lo_deg + theta_hi_deg) * 0.5f; }
+};
+
+struct ModelPoint {
+  std::int16_t x = 0;
+  std::int16_t y = 0;
+};
+
+class TableView {
+ public:
+  TableView() = default;
+
+  // Validates `bytes` and, on success, makes `out` a view of it. `bytes` must
+  // outlive the view. Never reads outside `bytes`, whatever it contains.
+  static Status open(std::span<const std::byte> bytes, TableView& out) noexcept;
+
+  std::uint32_t cell_count() const noexcept { return cell_count_; }
+  std::uint32_t reference_count() const noexcept { return reference_count_; }
+  std::uint16_t roi_width() const noexcept { return roi_width_; }
+  std::uint16_t roi_height() const noexcept { return roi_height_; }
+  std::uint32_t roi_pixels() const noexcept { return std::uint32_t{roi_width_} * roi_height_; }
+  // Position of ROI column 0 / row 0 relative to the ROI centre (the previous pose).
+  std::int16_t roi_origin_x() const noexcept { return roi_origin_x_; }
+  std::int16_t roi_origin_y() const noexcept { return roi_origin_y_; }
+  std::uint8_t reference_bytes() const noexcept { return reference_bytes_; }
+  table_format::DetectorKind detector_kind() const noexcept { return detector_kind_; }
+  std::uint16_t detector_threshold() const noexcept { return detector_threshold_; }
+  std::uint32_t max_stencil_size() const noexcept { return max_stencil_size_; }
+  std::uint16_t depth_count() const noexcept { return depth_count_; }
+  std::uint32_t model_point_count() const noexcept { return model_point_count_; }
+  Axis axis_x() const noexcept { return read_axis(table_format::offset::kAxisX); }
+  Axis axis_y() const noexcept { return read_axis(table_format::offset::kAxisY); }
+  Axis axis_theta() const noexcept { return read_axis(table_format::offset::kAxisTheta); }
+  float keep_ratio() const noexcept { return load_le<float>(base_ + table_format::offset::kKeepRatio); }
+  float model_ref_x() const noexcept { return load_le<float>(base_ + table_format::offset::kModelRefX); }
+  float model_ref_y() const noexcept { return load_le<float>(base_ + table_format::offset::kModelRefY); }
+  std::uint16_t model_width() const noexcept { return load_le<std::uint16_t>(base_ + table_format::offset::kModelWidth); }
+  std::uint16_t model_height() const noexcept { return load_le<std::uint16_t>(base_ + table_format::offset::kModelHeight); }
+  std::uint64_t seed() const noexcept { return load_le<std::uint64_t>(base_ + table_format::offset::kSeed); }
+  std::size_t size_bytes() const noexcept { return file_bytes_; }
+
+  // Precondition: cell < cell_count().
+  CellBounds cell(std::uint32_t cell) const noexcept;
+  std::uint32_t stencil_size(std::uint32_t cell) const noexcept {
+    return load_le<std::uint32_t>(cells_ + std::size_t{cell} * table_format::kCellDescriptorBytes +
+                                  table_format::cell_offset::kStencilSize);
+  }
+
+  // CSR access. Precondition: pixel < roi_pixels(); references of the pixel are
+  // indices [references_begin(pixel), references_begin(pixel + 1)).
+  std::uint32_t references_begin(std::uint32_t pixel) const noexcept {
+    return load_le<std::uint32_t>(pixel_offsets_ + std::size_t{pixel} * 4);
+  }
+  // Precondition: index < reference_count().
+  std::uint32_t reference(std::uint32_t index) const noexcept;
+  const std::byte* pixel_offsets_data() const noexcept { return pixel_offsets_; }
+  const std::byte* references_data() const noexcept { return references_; }
+
+  // Model points of one focus-stack depth, relative to the reference point.
+  // Precondition: depth < depth_count(), i < model_point_count(depth).
+  std::uint32_t model_point_count(std::uint16_t depth) const noexcept {
+    return load_le<std::uint32_t>(model_counts_ + std::size_t{depth} * 4);
+  }
+  ModelPoint model_point(std::uint32_t index_over_all_depths) const noexcept {
+    const std::byte* p = model_points_ + std::size_t{index_over_all_depths} * table_format::kModelPointBytes;
+    return {load_le<std::int16_t>(p), load_le<std::int16_t>(p + 2)};
+  }
+
+ private:
+  Axis read_axis(std::size_t at) const noexcept {
+    return {load_le<float>(base_ + at), load_le<float>(base_ + at + 4), load_le<std::uint32_t>(base_ + at + 8)};
+  }
+
+  const std::byte* base_ = nullptr;
+  const std::byte* cells_ = nullptr;
+  const std::byte* pixel_offsets_ = nullptr;
+  const std::byte* references_ = nullptr;
+  const std::byte* model_counts_ = nullptr;
+  const std::byte* model_points_ = nullptr;
+  std::uint32_t file_bytes_ = 0;
+  std::uint32_t cell_count_ = 0;
+  std::uint32_t reference_count_ = 0;
+  std::uint32_t max_stencil_size_ = 0;
+  std::uint32_t model_point_count_ = 0;
+  std::uint16_t roi_width_ = 0;
+  std::uint16_t roi_height_ = 0;
+  std::int16_t roi_origin_x_ = 0;
+  std::int16_t roi_origin_y_ = 0;
+  std::uint16_t detector_threshold_ = 0;
+  std::uint16_t depth_count_ = 0;
+  std::uint8_t reference_bytes_ = 0;
+  table_format::DetectorKind detector_kind_ = table_format::DetectorKind::kBinary;
+};
+
+}  // namespace gabarit

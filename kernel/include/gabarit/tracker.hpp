@@ -1,0 +1,113 @@
+// One tracking step: place the ROI around the previous pose, extract features,
+// vote, pick the best cell, update the pose.
+//
+// Geometry. The ROI centre is the previous position rounded to the nearest
+// pixel, c = (round(x), round(y)). Table ROI pixel (col, row) is the offset
+// d = (roi_origin_x + col, roi_origin_y + row) from c in the *table frame*,
+// which is the image frame rotated by the previous angle theta: an image
+// pixel p maps to d = R(-theta) (p - c), rounded to the nearest pixel. With a
+// winning cell U (centre t = (tx, ty), angle centre a, depth n) the new pose is
+//   (x, y) = c + R(theta) t,   theta' = theta + a,   depth' = n.
+// With theta = 0 this is exactly "previous pose plus the centre of the cell".
+// Model point m (relative to the reference point) then lies at
+//   (x, y) + R(theta') m   in image axes (y down).
+//
+// State. kLost when the best cell has no vote; kUncertain when the runner-up
+// has the same normalised score (the motion is ambiguous); kTracking
+// otherwise. (The motion filter of a later issue refines this.)
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <span>
+
+#include "gabarit/features.hpp"
+#include "gabarit/image_view.hpp"
+#include "gabarit/roi_point.hpp"
+#include "gabarit/status.hpp"
+#include "gabarit/table_view.hpp"
+#include "gabarit/voter.hpp"
+
+namespace gabarit {
+
+struct Pose {
+  float x = 0.0f;          // image position of the model's reference point, pixels
+  float y = 0.0f;
+  float theta_deg = 0.0f;  // rotation about the reference point, degrees
+  std::uint16_t depth = 0; // focus-stack index
+};
+
+enum class TrackState : std::uint8_t { kTracking = 0, kUncertain = 1, kLost = 2 };
+const char* track_state_name(TrackState state) noexcept;
+
+// Side of the square image window that contains the ROI rotated by any angle:
+// 2 * ceil(r) + 1 where r is the ROI corner farthest from the ROI centre.
+constexpr std::uint32_t tracker_window_side(std::uint16_t roi_width, std::uint16_t roi_height,
+                                            std::int16_t roi_origin_x, std::int16_t roi_origin_y) noexcept {
+  std::int64_t r2 = 0;
+  const std::int64_t xs[2] = {roi_origin_x, std::int64_t{roi_origin_x} + roi_width - 1};
+  const std::int64_t ys[2] = {roi_origin_y, std::int64_t{roi_origin_y} + roi_height - 1};
+  for (std::int64_t x : xs)
+    for (std::int64_t y : ys) r2 = x * x + y * y > r2 ? x * x + y * y : r2;
+  std::int64_t r = 0;
+  while (r * r < r2) ++r;  // ceil(sqrt(r2)) without floating point
+  return static_cast<std::uint32_t>(2 * r + 1);
+}
+
+// Scratch sizes for track_step; use them to size static buffers and
+// static_assert against them on an MCU.
+constexpr std::size_t tracker_feature_capacity(std::uint16_t roi_width, std::uint16_t roi_height,
+                                               std::int16_t roi_origin_x, std::int16_t roi_origin_y) noexcept {
+  const std::size_t side = tracker_window_side(roi_width, roi_height, roi_origin_x, roi_origin_y);
+  const std::size_t roi = std::size_t{roi_width} * roi_height;
+  return side * side > roi ? side * side : roi;
+}
+// One bit per ROI pixel: de-duplicates features after rotation into the table frame.
+constexpr std::size_t tracker_mask_bytes(std::uint16_t roi_width, std::uint16_t roi_height) noexcept {
+  return (std::size_t{roi_width} * roi_height + 7) / 8;
+}
+inline std::size_t tracker_feature_capacity(const TableView& t) noexcept {
+  return tracker_feature_capacity(t.roi_width(), t.roi_height(), t.roi_origin_x(), t.roi_origin_y());
+}
+inline std::size_t tracker_mask_bytes(const TableView& t) noexcept {
+  return tracker_mask_bytes(t.roi_width(), t.roi_height());
+}
+
+struct TrackerScratch {
+  std::span<RoiPoint> features;      // >= tracker_feature_capacity(table) avoids dropped features
+  std::span<VoteCounter> counters;   // == voter_counter_count(table.cell_count())
+  std::span<std::uint8_t> roi_mask;  // >= tracker_mask_bytes(table)
+};
+
+struct StepResult {
+  Pose pose;
+  CellScore best;
+  CellScore runner_up;     // cell == kNoCell when the table has one cell
+  float score = 0.0f;      // normalised score of the best cell, votes / stencil size
+  TrackState state = TrackState::kLost;
+  std::int32_t roi_centre_x = 0;
+  std::int32_t roi_centre_y = 0;
+  std::uint32_t features = 0;          // feature pixels that voted
+  std::uint32_t features_dropped = 0;  // lost to a too-small feature buffer
+  std::uint64_t votes = 0;             // counter increments this frame
+};
+
+// The feature detector frames go through; a table records the one its model
+// was built with, and a caller may override it (e.g. binary synthetic frames).
+struct Detector {
+  table_format::DetectorKind kind = table_format::DetectorKind::kBinary;
+  std::uint16_t threshold = 0;
+};
+inline Detector detector_of(const TableView& t) noexcept { return {t.detector_kind(), t.detector_threshold()}; }
+
+// Precondition: `table` was opened successfully. Errors: kInvalidArgument for
+// an invalid image, a non-finite pose or a bad detector threshold,
+// kBufferTooSmall for short scratch.
+Status track_step(const TableView& table, const Detector& detector, const ImageView& image, const Pose& previous,
+                  TrackerScratch scratch, StepResult& result) noexcept;
+inline Status track_step(const TableView& table, const ImageView& image, const Pose& previous,
+                         TrackerScratch scratch, StepResult& result) noexcept {
+  return track_step(table, detector_of(table), image, previous, scratch, result);
+}
+
+}  // namespace gabarit

@@ -1,0 +1,102 @@
+#include "gabarit/features.hpp"
+
+namespace gabarit {
+namespace {
+
+// The part of the window that lies inside [lo_x, hi_x) x [lo_y, hi_y) of the
+// image, in image coordinates; empty when they do not meet.
+struct Span2 {
+  std::int64_t x_begin, x_end, y_begin, y_end;
+  bool empty() const noexcept { return x_begin >= x_end || y_begin >= y_end; }
+};
+
+Span2 clip(const ImageWindow& w, std::int64_t lo_x, std::int64_t hi_x, std::int64_t lo_y, std::int64_t hi_y) noexcept {
+  auto max = [](std::int64_t a, std::int64_t b) { return a > b ? a : b; };
+  auto min = [](std::int64_t a, std::int64_t b) { return a < b ? a : b; };
+  return {max(w.x0, lo_x), min(std::int64_t{w.x0} + w.width, hi_x), max(w.y0, lo_y),
+          min(std::int64_t{w.y0} + w.height, hi_y)};
+}
+
+inline void emit(std::span<RoiPoint> out, FeatureCount& count, const ImageWindow& w, std::int64_t x,
+                 std::int64_t y) noexcept {
+  if (count.written < out.size()) {
+    out[count.written++] = {static_cast<std::uint16_t>(x - w.x0), static_cast<std::uint16_t>(y - w.y0)};
+  } else {
+    ++count.dropped;
+  }
+}
+
+Status check(const ImageView& image, const ImageWindow& window) noexcept {
+  return image.valid() && window.width > 0 && window.height > 0 ? Status::kOk : Status::kInvalidArgument;
+}
+
+inline std::int32_t abs32(std::int32_t v) noexcept { return v < 0 ? -v : v; }
+
+}  // namespace
+
+std::uint16_t gradient_magnitude(const ImageView& image, std::uint32_t x, std::uint32_t y) noexcept {
+  if (x == 0 || y == 0 || x + 1 >= image.width || y + 1 >= image.height) return 0;
+  const std::uint8_t* up = image.pixels + std::size_t{y - 1} * image.stride + x;
+  const std::uint8_t* mid = up + image.stride;
+  const std::uint8_t* down = mid + image.stride;
+  const std::int32_t gx = (up[1] + 2 * mid[1] + down[1]) - (up[-1] + 2 * mid[-1] + down[-1]);
+  const std::int32_t gy = (down[-1] + 2 * down[0] + down[1]) - (up[-1] + 2 * up[0] + up[1]);
+  return static_cast<std::uint16_t>(abs32(gx) + abs32(gy));
+}
+
+Status extract_binary(const ImageView& image, const ImageWindow& window, std::span<RoiPoint> out,
+                      FeatureCount& count) noexcept {
+  GABARIT_TRY(check(image, window));
+  count = {};
+  const Span2 s = clip(window, 0, image.width, 0, image.height);
+  if (s.empty()) return Status::kOk;
+  for (std::int64_t y = s.y_begin; y < s.y_end; ++y) {
+    const std::uint8_t* row = image.pixels + static_cast<std::size_t>(y) * image.stride;
+    for (std::int64_t x = s.x_begin; x < s.x_end; ++x) {
+      if (row[x] != 0) emit(out, count, window, x, y);
+    }
+  }
+  return Status::kOk;
+}
+
+Status extract_gradient_rows(const ImageView& image, const ImageWindow& window, std::uint16_t threshold,
+                             std::span<RoiPoint> out, FeatureCount& count) noexcept {
+  GABARIT_TRY(check(image, window));
+  if (threshold == 0) return Status::kInvalidArgument;  // every pixel would pass: rows, not edges
+  count = {};
+  // Only interior pixels have a full 3x3 neighbourhood.
+  const Span2 s = clip(window, 1, std::int64_t{image.width} - 1, 1, std::int64_t{image.height} - 1);
+  if (s.empty()) return Status::kOk;
+  for (std::int64_t y = s.y_begin; y < s.y_end; ++y) {
+    bool in_run = false;
+    std::uint16_t best = 0;
+    std::int64_t best_x = 0;
+    for (std::int64_t x = s.x_begin; x < s.x_end; ++x) {
+      const std::uint16_t m = gradient_magnitude(image, static_cast<std::uint32_t>(x), static_cast<std::uint32_t>(y));
+      if (m >= threshold) {
+        if (!in_run || m > best) {
+          best = m;
+          best_x = x;
+        }
+        in_run = true;
+      } else if (in_run) {
+        emit(out, count, window, best_x, y);
+        in_run = false;
+      }
+    }
+    if (in_run) emit(out, count, window, best_x, y);
+  }
+  return Status::kOk;
+}
+
+Status extract_features(const ImageView& image, const ImageWindow& window, table_format::DetectorKind kind,
+                        std::uint16_t threshold, std::span<RoiPoint> out, FeatureCount& count) noexcept {
+  switch (kind) {
+    case table_format::DetectorKind::kBinary: return extract_binary(image, window, out, count);
+    case table_format::DetectorKind::kGradientRows:
+      return extract_gradient_rows(image, window, threshold, out, count);
+  }
+  return Status::kInvalidArgument;
+}
+
+}  // namespace gabarit

@@ -1,0 +1,231 @@
+#include "gabarit/table_view.hpp"
+
+#include <cstring>
+
+#include "gabarit/crc32.hpp"
+
+namespace gabarit {
+namespace {
+
+namespace off = table_format::offset;
+namespace coff = table_format::cell_offset;
+using table_format::align_up;
+
+bool is_finite(float f) noexcept {
+  std::uint32_t bits;
+  std::memcpy(&bits, &f, sizeof bits);
+  return (bits & 0x7F800000u) != 0x7F800000u;
+}
+
+bool all_zero(const std::byte* p, std::size_t n) noexcept {
+  for (std::size_t i = 0; i < n; ++i) {
+    if (p[i] != std::byte{0}) return false;
+  }
+  return true;
+}
+
+Status check_axis(const std::byte* base, std::size_t at, std::uint32_t& cells_out) noexcept {
+  const float lo = load_le<float>(base + at);
+  const float hi = load_le<float>(base + at + 4);
+  const std::uint32_t cells = load_le<std::uint32_t>(base + at + 8);
+  if (!is_finite(lo) || !is_finite(hi) || cells == 0 || lo > hi) return Status::kBadHeaderField;
+  if (cells == 1 && lo != hi) return Status::kBadHeaderField;
+  if (cells > 1 && lo == hi) return Status::kBadHeaderField;
+  if (cells > table_format::kMaxCells) return Status::kCountTooLarge;
+  cells_out = cells;
+  return Status::kOk;
+}
+
+template <class Ref>
+Status check_references(const std::byte* offsets, const std::byte* refs, std::uint32_t pixels,
+                        std::uint32_t cell_count) noexcept {
+  for (std::uint32_t p = 0; p < pixels; ++p) {
+    const std::uint32_t begin = load_le<std::uint32_t>(offsets + std::size_t{p} * 4);
+    const std::uint32_t end = load_le<std::uint32_t>(offsets + std::size_t{p} * 4 + 4);
+    std::uint32_t previous = 0;
+    for (std::uint32_t i = begin; i < end; ++i) {
+      const std::uint32_t r = load_le<Ref>(refs + std::size_t{i} * sizeof(Ref));
+      if (r >= cell_count) return Status::kReferenceOutOfRange;
+      if (i != begin && r <= previous) return Status::kReferencesNotSorted;
+      previous = r;
+    }
+  }
+  return Status::kOk;
+}
+
+}  // namespace
+
+Status TableView::open(std::span<const std::byte> bytes, TableView& out) noexcept {
+  const std::byte* b = bytes.data();
+  const std::size_t n = bytes.size();
+
+  // Identity first, so a random file reports "bad magic", not a size problem.
+  if (n < sizeof(table_format::kMagic)) return Status::kTruncated;
+  if (std::memcmp(b, table_format::kMagic, sizeof(table_format::kMagic)) != 0) return Status::kBadMagic;
+  if (n < off::kHeaderBytes) return Status::kTruncated;
+  if (load_le<std::uint16_t>(b + off::kVersionMajor) != table_format::kVersionMajor) {
+    return Status::kUnsupportedVersion;
+  }
+  if (n < table_format::kHeaderBytes) return Status::kTruncated;
+  if (load_le<std::uint32_t>(b + off::kHeaderBytes) != table_format::kHeaderBytes) {
+    return Status::kBadHeaderField;
+  }
+  const std::uint32_t file_bytes = load_le<std::uint32_t>(b + off::kFileBytes);
+  if (file_bytes > n) return Status::kTruncated;
+  if (file_bytes != n || file_bytes < table_format::kHeaderBytes) return Status::kSizeMismatch;
+
+  const std::uint32_t crc = crc32(bytes.subspan(off::kFlags));
+  if (crc != load_le<std::uint32_t>(b + off::kCrc32)) return Status::kBadChecksum;
+
+  // Header fields. Past the CRC only a deliberately crafted table reaches
+  // here, but it must still be refused without any out-of-bounds read.
+  if (load_le<std::uint32_t>(b + off::kFlags) != 0 || load_le<std::uint16_t>(b + off::kReserved58) != 0 ||
+      !all_zero(b + off::kReserved140, table_format::kHeaderBytes - off::kReserved140)) {
+    return Status::kBadHeaderField;
+  }
+  const std::uint32_t cell_count = load_le<std::uint32_t>(b + off::kCellCount);
+  const std::uint32_t reference_count = load_le<std::uint32_t>(b + off::kReferenceCount);
+  const std::uint16_t roi_width = load_le<std::uint16_t>(b + off::kRoiWidth);
+  const std::uint16_t roi_height = load_le<std::uint16_t>(b + off::kRoiHeight);
+  const std::uint8_t reference_bytes = load_le<std::uint8_t>(b + off::kReferenceBytes);
+  const std::uint8_t detector = load_le<std::uint8_t>(b + off::kDetectorKind);
+  const std::uint32_t model_point_count = load_le<std::uint32_t>(b + off::kModelPointCount);
+  const std::uint16_t depth_count = load_le<std::uint16_t>(b + off::kDepthCount);
+
+  if (cell_count > table_format::kMaxCells || reference_count > table_format::kMaxReferences ||
+      std::uint32_t{roi_width} * roi_height > table_format::kMaxRoiPixels ||
+      model_point_count > table_format::kMaxModelPoints || depth_count > table_format::kMaxDepths) {
+    return Status::kCountTooLarge;
+  }
+  if (cell_count == 0 || roi_width == 0 || roi_height == 0 || depth_count == 0) return Status::kBadHeaderField;
+  if (reference_bytes != table_format::narrowest_reference_bytes(cell_count)) return Status::kBadHeaderField;
+  if (detector > static_cast<std::uint8_t>(table_format::DetectorKind::kGradientRows)) {
+    return Status::kBadHeaderField;
+  }
+  std::uint32_t cells_x = 0, cells_y = 0, cells_theta = 0;
+  GABARIT_TRY(check_axis(b, off::kAxisX, cells_x));
+  GABARIT_TRY(check_axis(b, off::kAxisY, cells_y));
+  GABARIT_TRY(check_axis(b, off::kAxisTheta, cells_theta));
+  const std::uint64_t space_cells = std::uint64_t{cells_x} * cells_y * cells_theta * depth_count;
+  if (space_cells != cell_count) return Status::kSizeMismatch;
+  const float keep = load_le<float>(b + off::kKeepRatio);
+  if (!is_finite(keep) || !(keep > 0.0f) || keep > 1.0f) return Status::kBadHeaderField;
+  if (!is_finite(load_le<float>(b + off::kModelRefX)) || !is_finite(load_le<float>(b + off::kModelRefY))) {
+    return Status::kBadHeaderField;
+  }
+
+  // Sections follow the header in a fixed order, each 8-byte aligned, with no
+  // gaps beyond alignment: the layout is canonical, so any other offset is an error.
+  const std::uint32_t pixels = std::uint32_t{roi_width} * roi_height;
+  std::uint32_t at = table_format::kHeaderBytes;
+  const std::uint32_t cells_at = at;
+  at = align_up(at + cell_count * table_format::kCellDescriptorBytes);
+  const std::uint32_t offsets_at = at;
+  at = align_up(at + (pixels + 1) * 4);
+  const std::uint32_t refs_at = at;
+  at = align_up(at + reference_count * reference_bytes);
+  const std::uint32_t counts_at = at;
+  at = align_up(at + std::uint32_t{depth_count} * 4);
+  const std::uint32_t points_at = at;
+  at = align_up(at + model_point_count * table_format::kModelPointBytes);
+  if (load_le<std::uint32_t>(b + off::kCellsOffset) != cells_at ||
+      load_le<std::uint32_t>(b + off::kPixelOffsetsOffset) != offsets_at ||
+      load_le<std::uint32_t>(b + off::kReferencesOffset) != refs_at ||
+      load_le<std::uint32_t>(b + off::kModelCountsOffset) != counts_at ||
+      load_le<std::uint32_t>(b + off::kModelPointsOffset) != points_at) {
+    return Status::kSectionOutOfBounds;
+  }
+  if (at != file_bytes) return Status::kSizeMismatch;
+
+  // CSR offsets: start at 0, never decrease, end at the reference count.
+  const std::byte* offsets = b + offsets_at;
+  if (load_le<std::uint32_t>(offsets) != 0) return Status::kOffsetsNotMonotonic;
+  for (std::uint32_t p = 0; p < pixels; ++p) {
+    if (load_le<std::uint32_t>(offsets + std::size_t{p} * 4 + 4) < load_le<std::uint32_t>(offsets + std::size_t{p} * 4)) {
+      return Status::kOffsetsNotMonotonic;
+    }
+  }
+  if (load_le<std::uint32_t>(offsets + std::size_t{pixels} * 4) != reference_count) {
+    return Status::kOffsetsNotMonotonic;
+  }
+
+  const std::byte* refs = b + refs_at;
+  switch (reference_bytes) {
+    case 1: GABARIT_TRY(check_references<std::uint8_t>(offsets, refs, pixels, cell_count)); break;
+    case 2: GABARIT_TRY(check_references<std::uint16_t>(offsets, refs, pixels, cell_count)); break;
+    default: GABARIT_TRY(check_references<std::uint32_t>(offsets, refs, pixels, cell_count)); break;
+  }
+
+  // Cell descriptors: finite ordered bounds, a valid depth, and stencil sizes
+  // that add up to the reference count (each reference is one stencil pixel).
+  std::uint64_t stencil_total = 0;
+  std::uint32_t stencil_max = 0;
+  for (std::uint32_t c = 0; c < cell_count; ++c) {
+    const std::byte* d = b + cells_at + std::size_t{c} * table_format::kCellDescriptorBytes;
+    for (std::size_t f = coff::kXLo; f <= coff::kThetaLo; f += 8) {
+      const float lo = load_le<float>(d + f);
+      const float hi = load_le<float>(d + f + 4);
+      if (!is_finite(lo) || !is_finite(hi) || lo > hi) return Status::kBadHeaderField;
+    }
+    if (load_le<std::uint16_t>(d + coff::kDepth) >= depth_count || load_le<std::uint16_t>(d + coff::kReserved) != 0) {
+      return Status::kBadHeaderField;
+    }
+    const std::uint32_t size = load_le<std::uint32_t>(d + coff::kStencilSize);
+    stencil_total += size;
+    if (size > stencil_max) stencil_max = size;
+  }
+  if (stencil_total != reference_count || stencil_max != load_le<std::uint32_t>(b + off::kMaxStencilSize)) {
+    return Status::kStencilSizeMismatch;
+  }
+
+  std::uint64_t model_total = 0;
+  for (std::uint32_t d = 0; d < depth_count; ++d) model_total += load_le<std::uint32_t>(b + counts_at + std::size_t{d} * 4);
+  if (model_total != model_point_count) return Status::kSizeMismatch;
+
+  TableView view;
+  view.base_ = b;
+  view.cells_ = b + cells_at;
+  view.pixel_offsets_ = offsets;
+  view.references_ = refs;
+  view.model_counts_ = b + counts_at;
+  view.model_points_ = b + points_at;
+  view.file_bytes_ = file_bytes;
+  view.cell_count_ = cell_count;
+  view.reference_count_ = reference_count;
+  view.max_stencil_size_ = stencil_max;
+  view.model_point_count_ = model_point_count;
+  view.roi_width_ = roi_width;
+  view.roi_height_ = roi_height;
+  view.roi_origin_x_ = load_le<std::int16_t>(b + off::kRoiOriginX);
+  view.roi_origin_y_ = load_le<std::int16_t>(b + off::kRoiOriginY);
+  view.detector_threshold_ = load_le<std::uint16_t>(b + off::kDetectorThreshold);
+  view.depth_count_ = depth_count;
+  view.reference_bytes_ = reference_bytes;
+  view.detector_kind_ = static_cast<table_format::DetectorKind>(detector);
+  out = view;
+  return Status::kOk;
+}
+
+CellBounds TableView::cell(std::uint32_t cell) const noexcept {
+  const std::byte* d = cells_ + std::size_t{cell} * table_format::kCellDescriptorBytes;
+  CellBounds c;
+  c.x_lo = load_le<float>(d + coff::kXLo);
+  c.x_hi = load_le<float>(d + coff::kXHi);
+  c.y_lo = load_le<float>(d + coff::kYLo);
+  c.y_hi = load_le<float>(d + coff::kYHi);
+  c.theta_lo_deg = load_le<float>(d + coff::kThetaLo);
+  c.theta_hi_deg = load_le<float>(d + coff::kThetaHi);
+  c.depth = load_le<std::uint16_t>(d + coff::kDepth);
+  c.stencil_size = load_le<std::uint32_t>(d + coff::kStencilSize);
+  return c;
+}
+
+std::uint32_t TableView::reference(std::uint32_t index) const noexcept {
+  switch (reference_bytes_) {
+    case 1: return load_le<std::uint8_t>(references_ + index);
+    case 2: return load_le<std::uint16_t>(references_ + std::size_t{index} * 2);
+    default: return load_le<std::uint32_t>(references_ + std::size_t{index} * 4);
+  }
+}
+
+}  // namespace gabarit

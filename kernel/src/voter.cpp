@@ -1,0 +1,136 @@
+#include "gabarit/voter.hpp"
+
+namespace gabarit {
+namespace {
+
+Status check_counters(const TableView& table, std::span<const VoteCounter> counters) noexcept {
+  if (table.cell_count() == 0) return Status::kInvalidArgument;  // a default (unopened) view
+  return counters.size() == voter_counter_count(table.cell_count()) ? Status::kOk : Status::kBufferTooSmall;
+}
+
+Status check_features(const TableView& table, std::span<const RoiPoint> features) noexcept {
+  const std::uint16_t w = table.roi_width();
+  const std::uint16_t h = table.roi_height();
+  for (const RoiPoint& f : features) {
+    if (f.col >= w || f.row >= h) return Status::kFeatureOutOfRoi;
+  }
+  return Status::kOk;
+}
+
+inline void bump(VoteCounter* counters, std::uint32_t cell) noexcept {
+  const VoteCounter c = counters[cell];
+  counters[cell] = static_cast<VoteCounter>(c + (c != kVoteCounterMax));
+}
+
+template <class Ref>
+void vote_scalar(const TableView& table, std::span<const RoiPoint> features, VoteCounter* counters,
+                 std::uint64_t& votes) noexcept {
+  const std::byte* offsets = table.pixel_offsets_data();
+  const std::byte* refs = table.references_data();
+  const std::uint32_t w = table.roi_width();
+  for (const RoiPoint& f : features) {
+    const std::size_t pixel = std::size_t{f.row} * w + f.col;
+    const std::uint32_t begin = load_le<std::uint32_t>(offsets + pixel * 4);
+    const std::uint32_t end = load_le<std::uint32_t>(offsets + pixel * 4 + 4);
+    for (std::uint32_t i = begin; i < end; ++i) bump(counters, load_le<Ref>(refs + std::size_t{i} * sizeof(Ref)));
+    votes += end - begin;
+  }
+}
+
+// Four references per step. The cells listed by one pixel are distinct (the
+// table view checked they strictly increase), so the four read-modify-writes
+// are independent and can be issued together.
+template <class Ref>
+void vote_unrolled(const TableView& table, std::span<const RoiPoint> features, VoteCounter* counters,
+                   std::uint64_t& votes) noexcept {
+  const std::byte* offsets = table.pixel_offsets_data();
+  const std::byte* refs = table.references_data();
+  const std::uint32_t w = table.roi_width();
+  for (const RoiPoint& f : features) {
+    const std::size_t pixel = std::size_t{f.row} * w + f.col;
+    const std::uint32_t begin = load_le<std::uint32_t>(offsets + pixel * 4);
+    const std::uint32_t end = load_le<std::uint32_t>(offsets + pixel * 4 + 4);
+    const std::byte* r = refs + std::size_t{begin} * sizeof(Ref);
+    std::uint32_t n = end - begin;
+    votes += n;
+    for (; n >= 4; n -= 4, r += 4 * sizeof(Ref)) {
+      const std::uint32_t c0 = load_le<Ref>(r);
+      const std::uint32_t c1 = load_le<Ref>(r + sizeof(Ref));
+      const std::uint32_t c2 = load_le<Ref>(r + 2 * sizeof(Ref));
+      const std::uint32_t c3 = load_le<Ref>(r + 3 * sizeof(Ref));
+      const VoteCounter v0 = counters[c0], v1 = counters[c1], v2 = counters[c2], v3 = counters[c3];
+      counters[c0] = static_cast<VoteCounter>(v0 + (v0 != kVoteCounterMax));
+      counters[c1] = static_cast<VoteCounter>(v1 + (v1 != kVoteCounterMax));
+      counters[c2] = static_cast<VoteCounter>(v2 + (v2 != kVoteCounterMax));
+      counters[c3] = static_cast<VoteCounter>(v3 + (v3 != kVoteCounterMax));
+    }
+    for (; n > 0; --n, r += sizeof(Ref)) bump(counters, load_le<Ref>(r));
+  }
+}
+
+template <template <class> class Loop>
+Status vote_with(const TableView& table, std::span<const RoiPoint> features, std::span<VoteCounter> counters,
+                 VoteTally& tally) noexcept {
+  GABARIT_TRY(check_counters(table, counters));
+  GABARIT_TRY(check_features(table, features));
+  switch (table.reference_bytes()) {
+    case 1: Loop<std::uint8_t>::run(table, features, counters.data(), tally.votes); break;
+    case 2: Loop<std::uint16_t>::run(table, features, counters.data(), tally.votes); break;
+    default: Loop<std::uint32_t>::run(table, features, counters.data(), tally.votes); break;
+  }
+  tally.features += static_cast<std::uint32_t>(features.size());
+  return Status::kOk;
+}
+
+template <class Ref>
+struct ScalarLoop {
+  static void run(const TableView& t, std::span<const RoiPoint> f, VoteCounter* c, std::uint64_t& v) noexcept {
+    vote_scalar<Ref>(t, f, c, v);
+  }
+};
+template <class Ref>
+struct UnrolledLoop {
+  static void run(const TableView& t, std::span<const RoiPoint> f, VoteCounter* c, std::uint64_t& v) noexcept {
+    vote_unrolled<Ref>(t, f, c, v);
+  }
+};
+
+}  // namespace
+
+Status clear_counters(const TableView& table, std::span<VoteCounter> counters) noexcept {
+  GABARIT_TRY(check_counters(table, counters));
+  for (VoteCounter& c : counters) c = 0;
+  return Status::kOk;
+}
+
+Status accumulate_votes_reference(const TableView& table, std::span<const RoiPoint> features,
+                                  std::span<VoteCounter> counters, VoteTally& tally) noexcept {
+  return vote_with<ScalarLoop>(table, features, counters, tally);
+}
+
+Status accumulate_votes(const TableView& table, std::span<const RoiPoint> features,
+                        std::span<VoteCounter> counters, VoteTally& tally) noexcept {
+  return vote_with<UnrolledLoop>(table, features, counters, tally);
+}
+
+Status select_top_cells(const TableView& table, std::span<const VoteCounter> counters,
+                        std::span<CellScore> top) noexcept {
+  GABARIT_TRY(check_counters(table, counters));
+  if (top.empty() || top.size() > table.cell_count()) return Status::kInvalidArgument;
+  std::size_t filled = 0;
+  for (std::uint32_t cell = 0; cell < table.cell_count(); ++cell) {
+    const CellScore s{cell, counters[cell], table.stencil_size(cell)};
+    // Cells arrive in increasing index order, so a cell equal to one already
+    // held never displaces it: ties keep the lowest index.
+    if (filled == top.size() && !ranks_before(s, top[filled - 1])) continue;
+    std::size_t at = filled < top.size() ? filled++ : filled - 1;
+    while (at > 0 && ranks_before(s, top[at - 1])) {
+      top[at] = top[at - 1];
+      --at;
+    }
+    top[at] = s;
+  }
+  return Status::kOk;
+}
+
+}  // namespace gabarit

@@ -1,0 +1,109 @@
+// gabarit tables build | inspect
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+
+#include "args.hpp"
+#include "commands.hpp"
+#include "gabarit/host/mapped_file.hpp"
+#include "gabarit/host/model.hpp"
+#include "gabarit/host/table_builder.hpp"
+#include "gabarit/host/table_inspect.hpp"
+#include "gabarit/features.hpp"
+#include "gabarit/table_view.hpp"
+
+namespace gabarit::cli {
+
+int tables_build(const std::vector<std::string>& argv) {
+  Args args("tables build", "(--model IMG.pgm ... | --model-points PTS.csv) --x MIN:MAX:CELLS --y MIN:MAX:CELLS [options] -o OUT",
+            "Builds a stencil look-up table (docs/table-format.md) for a model over a bounded motion space.\n"
+            "Several --model images form a focus stack ordered by depth index. Same inputs and seed give\n"
+            "byte-identical output.",
+            {{"--model", "IMG.pgm", "model image (repeat for a focus stack, in depth order)", true},
+             {"--model-points", "PTS.csv", "integer x,y feature positions relative to the reference point"},
+             {"--ref", "X,Y", "reference point in model-image pixels (default: floor(w/2),floor(h/2))"},
+             {"--x", "MIN:MAX:CELLS", "x translations: CELLS cells with centres evenly from MIN to MAX", false, true},
+             {"--y", "MIN:MAX:CELLS", "y translations, as --x", false, true},
+             {"--theta", "MIN:MAX:CELLS", "rotation in degrees, as --x (default 0:0:1)"},
+             {"--keep", "RATIO", "fraction of stencil references kept by decimation, (0,1] (default 1)"},
+             {"--seed", "N", "decimation seed (default 1)"},
+             {"--binary", "", "binary detector: a non-zero pixel is a feature (model images and frames)"},
+             {"--threshold", "N", "gradient detector threshold 1..2040 (default: a quarter of the model's strongest edge)"},
+             {"-o", "OUT", "output table file", false, true}});
+  if (!args.parse(argv)) return 0;
+  const bool has_images = args.has("--model");
+  if (has_images == args.has("--model-points")) throw UsageError("give either --model or --model-points");
+
+  host::ModelStack model;
+  if (has_images) {
+    host::ImageModelOptions mo;
+    mo.binary = args.has("--binary");
+    mo.threshold = static_cast<int>(args.integer("--threshold", -1, 1, kMaxGradientMagnitude));
+    if (mo.binary && args.has("--threshold")) throw UsageError("--threshold has no meaning with --binary");
+    if (args.has("--ref")) {
+      const auto ref = parse_number_list(args.get("--ref"), "--ref", 2, 2);
+      if (ref[0] != std::floor(ref[0]) || ref[1] != std::floor(ref[1]) || std::fabs(ref[0]) > 16384 || std::fabs(ref[1]) > 16384) {
+        throw UsageError("--ref: X,Y must be integer pixel positions");
+      }
+      mo.has_ref = true;
+      mo.ref_x = static_cast<std::int32_t>(ref[0]);
+      mo.ref_y = static_cast<std::int32_t>(ref[1]);
+    }
+    model = host::model_from_images(args.all("--model"), mo);
+  } else {
+    if (args.has("--ref")) throw UsageError("--ref applies to --model images; point CSVs are already relative to it");
+    model.depths.push_back(host::read_points_csv(args.get("--model-points")));
+    if (args.has("--binary")) {
+      model.detector.kind = table_format::DetectorKind::kBinary;
+      if (args.has("--threshold")) throw UsageError("--threshold has no meaning with --binary");
+    } else if (args.has("--threshold")) {
+      model.detector.kind = table_format::DetectorKind::kGradientRows;
+      model.detector.threshold = static_cast<std::uint16_t>(args.integer("--threshold", 1, 1, kMaxGradientMagnitude));
+    } else {
+      throw UsageError("--model-points: say which detector frames need: --binary or --threshold N");
+    }
+  }
+
+  host::BuildOptions bo;
+  bo.space.x = host::parse_axis(args.get("--x"), "--x");
+  bo.space.y = host::parse_axis(args.get("--y"), "--y");
+  bo.space.theta = host::parse_axis(args.get_or("--theta", "0:0:1"), "--theta");
+  bo.keep = args.number("--keep", 1.0, 0.0, 1.0);
+  if (!(bo.keep > 0)) throw UsageError("--keep must be above 0");
+  bo.seed = static_cast<std::uint64_t>(args.integer("--seed", 1, 0, INT64_MAX));
+  if (isatty(STDERR_FILENO)) {
+    bo.progress = [](std::size_t done, std::size_t total) {
+      std::fprintf(stderr, "\rstencils: %zu/%zu cells", done, total);
+      if (done == total) std::fputc('\n', stderr);
+    };
+  }
+  const std::vector<std::byte> bytes = host::build_table(model, bo);
+  TableView view;
+  if (const Status s = TableView::open(bytes, view); s != Status::kOk) {
+    throw host::Error(std::string("internal error: built table does not validate: ") + status_name(s));
+  }
+  host::write_file(args.get("-o"), bytes);
+  std::fprintf(stderr, "%s: %zu bytes, %u cells, %u references (%u-byte), ROI %ux%u\n", args.get("-o").c_str(), bytes.size(),
+               view.cell_count(), view.reference_count(), unsigned{view.reference_bytes()}, unsigned{view.roi_width()},
+               unsigned{view.roi_height()});
+  return 0;
+}
+
+int tables_inspect(const std::vector<std::string>& argv) {
+  Args args("tables inspect", "TABLE", "Validates a table and prints it as JSON: sizes, space, refs-per-pixel histogram, stencil sizes.",
+            {}, "TABLE");
+  if (!args.parse(argv)) return 0;
+  if (args.positionals().size() != 1) throw UsageError("give exactly one TABLE");
+  const std::string& path = args.positionals()[0];
+  host::MappedFile file(path);
+  TableView view;
+  if (const Status s = TableView::open(file.bytes(), view); s != Status::kOk) {
+    throw host::Error(path + ": not a valid table: " + status_name(s));
+  }
+  std::cout << host::inspect_json(view);
+  return 0;
+}
+
+}  // namespace gabarit::cli

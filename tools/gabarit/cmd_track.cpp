@@ -1,0 +1,89 @@
+// gabarit track
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+#include <optional>
+
+#include "args.hpp"
+#include "commands.hpp"
+#include "gabarit/host/error.hpp"
+#include "gabarit/host/image_io.hpp"
+#include "gabarit/host/mapped_file.hpp"
+#include "gabarit/host/tracking_run.hpp"
+
+namespace gabarit::cli {
+
+int track(const std::vector<std::string>& argv) {
+  Args args("track", "--table T --frames SEQ --init X,Y[,THETA[,DEPTH]] [--binary] [-o POSES.csv] [--stats STATS.json]",
+            "Tracks the table's model through a sequence (a Y4M file, Cmono or 4:2:0, luma used; or a directory of\n"
+            "PGM frames), streamed frame by frame. Writes frame,x,y,theta_deg,depth,votes,score,status per frame\n"
+            "(to stdout without -o).",
+            {{"--table", "T", "table file", false, true},
+             {"--frames", "SEQ", "Y4M file or directory of .pgm frames", false, true},
+             {"--init", "X,Y[,THETA[,DEPTH]]", "pose before the first frame (image position of the reference point)", false, true},
+             {"--binary", "", "use the binary detector on frames whatever the table says"},
+             {"-o", "POSES.csv", "pose output (default stdout)"},
+             {"--stats", "STATS.json", "per-frame timing and vote statistics"}});
+  if (!args.parse(argv)) return 0;
+  host::MappedFile file(args.get("--table"));
+  TableView table;
+  if (const Status s = TableView::open(file.bytes(), table); s != Status::kOk) {
+    throw host::Error(args.get("--table") + ": not a valid table: " + status_name(s));
+  }
+  const auto init = parse_number_list(args.get("--init"), "--init", 2, 4);
+  Pose pose{static_cast<float>(init[0]), static_cast<float>(init[1]), init.size() > 2 ? static_cast<float>(init[2]) : 0.0f, 0};
+  if (std::fabs(init[0]) > 1e5 || std::fabs(init[1]) > 1e5 || (init.size() > 2 && std::fabs(init[2]) > 1e5)) {
+    throw UsageError("--init: values must lie within +-100000");
+  }
+  if (init.size() > 3) {
+    if (init[3] < 0 || init[3] >= table.depth_count() || init[3] != std::floor(init[3])) {
+      throw UsageError("--init: DEPTH must be an integer in 0.." + std::to_string(table.depth_count() - 1));
+    }
+    pose.depth = static_cast<std::uint16_t>(init[3]);
+  }
+  std::optional<Detector> detector;
+  if (args.has("--binary")) detector = Detector{table_format::DetectorKind::kBinary, 0};
+
+  std::ofstream file_out;
+  std::ostream* out = &std::cout;
+  if (args.has("-o")) {
+    file_out.open(args.get("-o"));
+    if (!file_out) throw host::Error(args.get("-o") + ": cannot create");
+    out = &file_out;
+  }
+  *out << host::kPoseCsvHeader << '\n';
+  auto frames = host::open_frames(args.get("--frames"));
+  std::vector<double> micros;
+  double features = 0, votes = 0;
+  std::uint64_t dropped = 0;
+  std::size_t lost = 0, uncertain = 0;
+  host::run_tracking(table, *frames, pose, detector, [&](const host::TrackRow& row) {
+    *out << host::pose_csv_row(row) << '\n';
+    micros.push_back(row.micros);
+    features += row.step.features;
+    votes += static_cast<double>(row.step.votes);
+    dropped += row.step.features_dropped;
+    lost += row.step.state == TrackState::kLost;
+    uncertain += row.step.state == TrackState::kUncertain;
+  });
+  out->flush();
+  if (!*out) throw host::Error("pose output: write failed");
+  const host::TimingSummary t = host::summarise_timing(micros);
+  const double n = t.frames ? static_cast<double>(t.frames) : 1.0;
+  if (args.has("--stats")) {
+    std::ofstream stats(args.get("--stats"));
+    if (!stats) throw host::Error(args.get("--stats") + ": cannot create");
+    stats << "{\n  \"frames\": " << t.frames << ",\n  \"per_frame_us\": {\"mean\": " << t.mean << ", \"p50\": " << t.p50
+          << ", \"p99\": " << t.p99 << ", \"max\": " << t.max << "},\n  \"features_per_frame\": " << features / n
+          << ",\n  \"votes_per_frame\": " << votes / n << ",\n  \"features_dropped\": " << dropped
+          << ",\n  \"lost_frames\": " << lost << ",\n  \"uncertain_frames\": " << uncertain
+          << ",\n  \"table_bytes\": " << table.size_bytes() << ",\n  \"cells\": " << table.cell_count() << "\n}\n";
+    if (!stats.flush()) throw host::Error(args.get("--stats") + ": write failed");
+  }
+  std::fprintf(stderr, "tracked %zu frames: %.1f us/frame mean (p50 %.1f, p99 %.1f, max %.1f), %.0f features and %.0f votes per frame, %zu lost\n",
+               t.frames, t.mean, t.p50, t.p99, t.max, features / n, votes / n, lost);
+  return 0;
+}
+
+}  // namespace gabarit::cli

@@ -1,0 +1,16 @@
+// The gabarit CLI's subcommands; each takes the arguments after its name and
+// returns the process exit code (errors are thrown as host::Error/UsageError).
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace gabarit::cli {
+
+int tables_build(const std::vector<std::string>& args);
+int tables_inspect(const std::vector<std::string>& args);
+int synth(const std::vector<std::string>& args);
+int track(const std::vector<std::string>& args);
+int eval(const std::vector<std::string>& args);
+
+}  // namespace gabarit::cli

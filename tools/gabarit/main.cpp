@@ -1,0 +1,57 @@
+// gabarit — the host CLI: table building and inspection, synthetic sequences,
+// tracking and evaluation. Errors go to stderr with a non-zero exit code
+// (2 for bad usage, 1 for everything else).
+#include <cstdio>
+#include <cstring>
+#include <exception>
+#include <string>
+#include <vector>
+
+#include "args.hpp"
+#include "commands.hpp"
+
+namespace {
+
+constexpr const char* kUsage =
+    "usage: gabarit <command> [options]   (gabarit <command> --help for each)\n\n"
+    "commands:\n"
+    "  tables build     build a stencil look-up table from a model and a motion space\n"
+    "  tables inspect   validate a table and print it as JSON\n"
+    "  synth            write a synthetic sequence with ground truth\n"
+    "  track            track a model through a sequence\n"
+    "  eval             compare tracked poses with ground truth\n";
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::vector<std::string> args(argv + 1, argv + argc);
+  std::string command;
+  try {
+    if (args.empty() || args[0] == "--help" || args[0] == "-h" || args[0] == "help") {
+      std::fputs(kUsage, args.empty() ? stderr : stdout);
+      return args.empty() ? 2 : 0;
+    }
+    command = args[0];
+    args.erase(args.begin());
+    if (command == "tables") {
+      if (args.empty()) throw gabarit::cli::UsageError("tables: want 'build' or 'inspect'");
+      const std::string sub = args[0];
+      args.erase(args.begin());
+      command += " " + sub;
+      if (sub == "build") return gabarit::cli::tables_build(args);
+      if (sub == "inspect") return gabarit::cli::tables_inspect(args);
+      throw gabarit::cli::UsageError("tables: unknown subcommand '" + sub + "' (want build or inspect)");
+    }
+    if (command == "synth") return gabarit::cli::synth(args);
+    if (command == "track") return gabarit::cli::track(args);
+    if (command == "eval") return gabarit::cli::eval(args);
+    throw gabarit::cli::UsageError("unknown command '" + command + "'");
+  } catch (const gabarit::cli::UsageError& e) {
+    std::fprintf(stderr, "gabarit %s: %s\n(see gabarit %s --help)\n", command.c_str(), e.what(),
+                 command.empty() ? "" : command.c_str());
+    return 2;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "gabarit %s: error: %s\n", command.c_str(), e.what());
+    return 1;
+  }
+}

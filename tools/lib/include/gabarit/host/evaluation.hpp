@@ -1,0 +1,35 @@
+// Accuracy of tracked poses against ground truth (gt.csv from `gabarit synth`).
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace gabarit::host {
+
+struct PoseSample {
+  std::uint32_t frame = 0;
+  double x = 0, y = 0, theta_deg = 0;
+  std::uint32_t depth = 0;
+  bool visible = true;  // ground truth only
+};
+
+// Reads POSES.csv (frame,x,y,theta_deg,depth,...) or gt.csv
+// (frame,x,y,theta_deg,depth,visible); the header line is required.
+std::vector<PoseSample> read_pose_csv(const std::string& path);
+
+struct Accuracy {
+  std::size_t frames = 0;          // visible ground-truth frames with a pose
+  std::size_t exact = 0;           // |dx| < 0.5 and |dy| < 0.5 (the right pixel)
+  std::size_t within_1px = 0;      // Euclidean error <= 1 px
+  std::size_t within_2px = 0;
+  std::size_t missing = 0;         // visible truth frames with no pose row
+  double mean_error_px = 0;
+  double max_error_px = 0;
+  std::vector<std::uint32_t> wrong_frames;  // not exact
+};
+
+Accuracy evaluate(const std::vector<PoseSample>& poses, const std::vector<PoseSample>& truth);
+std::string accuracy_json(const Accuracy& a);
+
+}  // namespace gabarit::host

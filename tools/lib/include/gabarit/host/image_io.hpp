@@ -1,0 +1,58 @@
+// Grayscale images and sequences on the host: PGM files, Y4M streams (Cmono
+// or 4:2:0 — the luma plane is used), and directories of PGM frames. Frames
+// are read one at a time; a sequence is never loaded whole.
+#pragma once
+
+#include <cstdint>
+#include <cstdio>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "gabarit/image_view.hpp"
+
+namespace gabarit::host {
+
+struct GrayImage {
+  std::uint32_t width = 0;
+  std::uint32_t height = 0;
+  std::vector<std::uint8_t> pixels;  // row-major, stride == width
+
+  GrayImage() = default;
+  GrayImage(std::uint32_t w, std::uint32_t h, std::uint8_t fill = 0) : width(w), height(h), pixels(std::size_t{w} * h, fill) {}
+  std::uint8_t& at(std::uint32_t x, std::uint32_t y) { return pixels[std::size_t{y} * width + x]; }
+  std::uint8_t at(std::uint32_t x, std::uint32_t y) const { return pixels[std::size_t{y} * width + x]; }
+  ImageView view() const { return {pixels.data(), width, height, width}; }
+};
+
+// Binary (P5) or ASCII (P2) PGM with maxval <= 255. Errors name the file.
+GrayImage read_pgm(const std::string& path);
+void write_pgm(const std::string& path, const GrayImage& image);
+
+// A source of frames: next() fills `frame` and returns false at the end.
+class FrameSource {
+ public:
+  virtual ~FrameSource() = default;
+  virtual bool next(GrayImage& frame) = 0;
+};
+
+// A Y4M file, or a directory of .pgm frames read in name order.
+std::unique_ptr<FrameSource> open_frames(const std::string& path);
+
+// Writes a Y4M stream with colourspace Cmono.
+class Y4mWriter {
+ public:
+  Y4mWriter(const std::string& path, std::uint32_t width, std::uint32_t height, std::uint32_t fps = 30);
+  ~Y4mWriter();
+  Y4mWriter(const Y4mWriter&) = delete;
+  Y4mWriter& operator=(const Y4mWriter&) = delete;
+  void write(const GrayImage& frame);
+  void close();
+
+ private:
+  std::FILE* file_ = nullptr;
+  std::string path_;
+  std::uint32_t width_, height_;
+};
+
+}  // namespace gabarit::host

@@ -1,0 +1,39 @@
+// Stencils: S_U, the set of integer pixels the model's feature points cover
+// when moved by every transformation of cell U = [x_lo,x_hi] x [y_lo,y_hi] x
+// [theta_lo,theta_hi] x {n}.
+//
+//  1. Rotation: each feature point of stack image n is turned into the digital
+//     arc it sweeps about the reference point over [theta_lo, theta_hi],
+//     sampled so consecutive samples are <= 0.5 px apart at the model's
+//     largest radius, rounded to pixels and de-duplicated.
+//  2. Translation: that set is swept over the integer translations of the
+//     cell. Policy for non-integer bounds ("inside, else closest"): the
+//     integers k with lo <= k <= hi; when no integer lies inside (a cell
+//     narrower than a pixel), the integer closest to the cell centre. So
+//     1-pixel cells centred on integers use exactly that one translation and
+//     neighbouring cells do not share translations unless a bound is itself
+//     an integer.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "gabarit/host/model.hpp"
+#include "gabarit/table_view.hpp"
+
+namespace gabarit::host {
+
+struct IntegerRange {
+  std::int32_t first = 0;
+  std::int32_t last = 0;  // inclusive
+};
+IntegerRange integer_translations(float lo, float hi);
+
+// Step 1: the de-duplicated, sorted arc pixels of all points over [lo, hi] degrees.
+std::vector<Point> swept_arcs(const std::vector<Point>& points, float theta_lo_deg, float theta_hi_deg);
+
+// Steps 1 and 2: the stencil of `cell` for `points` (the features of the
+// cell's depth), sorted by (x, y) and without duplicates.
+std::vector<Point> stencil(const std::vector<Point>& points, const CellBounds& cell);
+
+}  // namespace gabarit::host

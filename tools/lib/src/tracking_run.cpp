@@ -1,0 +1,65 @@
+#include "gabarit/host/tracking_run.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+
+#include "gabarit/host/error.hpp"
+
+namespace gabarit::host {
+
+TimingSummary summarise_timing(std::vector<double> micros) {
+  TimingSummary s;
+  s.frames = micros.size();
+  if (micros.empty()) return s;
+  std::sort(micros.begin(), micros.end());
+  double sum = 0;
+  for (double m : micros) sum += m;
+  s.mean = sum / static_cast<double>(micros.size());
+  // Nearest-rank percentiles.
+  const auto rank = [&](double q) {
+    std::size_t r = static_cast<std::size_t>(q * static_cast<double>(micros.size()) + 0.999999);
+    return micros[std::clamp<std::size_t>(r, 1, micros.size()) - 1];
+  };
+  s.p50 = rank(0.50);
+  s.p99 = rank(0.99);
+  s.max = micros.back();
+  return s;
+}
+
+void run_tracking(const TableView& table, FrameSource& frames, const Pose& init, const std::optional<Detector>& detector,
+                  const std::function<void(const TrackRow&)>& on_row) {
+  std::vector<RoiPoint> features(tracker_feature_capacity(table));
+  std::vector<VoteCounter> counters(voter_counter_count(table.cell_count()));
+  std::vector<std::uint8_t> mask(tracker_mask_bytes(table));
+  const TrackerScratch scratch{features, counters, mask};
+  const Detector use = detector ? *detector : detector_of(table);
+
+  GrayImage frame;
+  Pose pose = init;
+  TrackRow row;
+  for (std::uint32_t index = 0; frames.next(frame); ++index) {
+    const auto start = std::chrono::steady_clock::now();
+    const Status status = track_step(table, use, frame.view(), pose, scratch, row.step);
+    const auto stop = std::chrono::steady_clock::now();
+    if (status != Status::kOk) {
+      throw Error("frame " + std::to_string(index) + ": tracking failed: " + status_name(status));
+    }
+    row.frame = index;
+    row.micros = std::chrono::duration<double, std::micro>(stop - start).count();
+    // A lost frame keeps the previous pose: there is no evidence to move it.
+    if (row.step.state == TrackState::kLost) row.step.pose = pose;
+    pose = row.step.pose;
+    on_row(row);
+  }
+}
+
+std::string pose_csv_row(const TrackRow& row) {
+  char line[192];
+  std::snprintf(line, sizeof line, "%u,%.3f,%.3f,%.3f,%u,%u,%.6f,%s", row.frame, static_cast<double>(row.step.pose.x),
+                static_cast<double>(row.step.pose.y), static_cast<double>(row.step.pose.theta_deg), row.step.pose.depth,
+                row.step.best.votes, static_cast<double>(row.step.score), track_state_name(row.step.state));
+  return line;
+}
+
+}  // namespace gabarit::host
