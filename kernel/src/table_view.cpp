@@ -55,6 +55,11 @@ Status check_references(const std::byte* offsets, const std::byte* refs, std::ui
 
 }  // namespace
 
+std::uint32_t table_checksum(std::span<const std::byte> table) noexcept {
+  const std::uint32_t head = crc32(table.first(off::kCrc32));
+  return crc32_update(head, table.subspan(off::kCrc32 + 4));
+}
+
 Status TableView::open(std::span<const std::byte> bytes, TableView& out) noexcept {
   const std::byte* b = bytes.data();
   const std::size_t n = bytes.size();
@@ -74,8 +79,7 @@ Status TableView::open(std::span<const std::byte> bytes, TableView& out) noexcep
   if (file_bytes > n) return Status::kTruncated;
   if (file_bytes != n || file_bytes < table_format::kHeaderBytes) return Status::kSizeMismatch;
 
-  const std::uint32_t crc = crc32(bytes.subspan(off::kFlags));
-  if (crc != load_le<std::uint32_t>(b + off::kCrc32)) return Status::kBadChecksum;
+  if (table_checksum(bytes) != load_le<std::uint32_t>(b + off::kCrc32)) return Status::kBadChecksum;
 
   // Header fields. Past the CRC only a deliberately crafted table reaches
   // here, but it must still be refused without any out-of-bounds read.

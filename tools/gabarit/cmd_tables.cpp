@@ -15,6 +15,20 @@
 #include "gabarit/table_view.hpp"
 
 namespace gabarit::cli {
+namespace {
+
+// A malformed axis is bad usage (exit 2), not a failed build.
+Axis axis_argument(const Args& args, const std::string& name, const std::string& fallback) {
+  try {
+    return host::parse_axis(args.get_or(name, fallback), name);
+  } catch (const UsageError&) {
+    throw;
+  } catch (const host::Error& e) {
+    throw UsageError(e.what());
+  }
+}
+
+}  // namespace
 
 int tables_build(const std::vector<std::string>& argv) {
   Args args("tables build", "(--model IMG.pgm ... | --model-points PTS.csv) --x MIN:MAX:CELLS --y MIN:MAX:CELLS [options] -o OUT",
@@ -67,9 +81,9 @@ int tables_build(const std::vector<std::string>& argv) {
   }
 
   host::BuildOptions bo;
-  bo.space.x = host::parse_axis(args.get("--x"), "--x");
-  bo.space.y = host::parse_axis(args.get("--y"), "--y");
-  bo.space.theta = host::parse_axis(args.get_or("--theta", "0:0:1"), "--theta");
+  bo.space.x = axis_argument(args, "--x", "");
+  bo.space.y = axis_argument(args, "--y", "");
+  bo.space.theta = axis_argument(args, "--theta", "0:0:1");
   bo.keep = args.number("--keep", 1.0, 0.0, 1.0);
   if (!(bo.keep > 0)) throw UsageError("--keep must be above 0");
   bo.seed = static_cast<std::uint64_t>(args.integer("--seed", 1, 0, INT64_MAX));

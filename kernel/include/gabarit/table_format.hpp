@@ -32,7 +32,7 @@ inline constexpr std::size_t kVersionMajor = 8;        // u16
 inline constexpr std::size_t kVersionMinor = 10;       // u16
 inline constexpr std::size_t kHeaderBytes = 12;        // u32 = 160
 inline constexpr std::size_t kFileBytes = 16;          // u32, whole table
-inline constexpr std::size_t kCrc32 = 20;              // u32 over bytes [24, file_bytes)
+inline constexpr std::size_t kCrc32 = 20;              // u32, CRC-32 of every byte except these four
 inline constexpr std::size_t kFlags = 24;              // u32, must be 0 in v1.0
 inline constexpr std::size_t kCellCount = 28;          // u32
 inline constexpr std::size_t kReferenceCount = 32;     // u32

@@ -41,6 +41,11 @@ struct ModelPoint {
   std::int16_t y = 0;
 };
 
+// CRC-32 of a table: every byte except the 4-byte CRC field itself (so a
+// flipped bit anywhere, header included, is caught). Precondition:
+// table.size() >= table_format::kHeaderBytes.
+std::uint32_t table_checksum(std::span<const std::byte> table) noexcept;
+
 class TableView {
  public:
   TableView() = default;

@@ -5,11 +5,11 @@
 #include <limits>
 
 #include "gabarit/byte_order.hpp"
-#include "gabarit/crc32.hpp"
 #include "gabarit/host/decimation.hpp"
 #include "gabarit/host/error.hpp"
 #include "gabarit/host/stencil.hpp"
 #include "gabarit/table_format.hpp"
+#include "gabarit/table_view.hpp"
 
 namespace gabarit::host {
 namespace {
@@ -185,7 +185,7 @@ std::vector<std::byte> build_table(const ModelStack& model, const BuildOptions& 
       ++k;
     }
   }
-  store_le<std::uint32_t>(b + off::kCrc32, crc32(std::span<const std::byte>(out).subspan(off::kFlags)));
+  store_le<std::uint32_t>(b + off::kCrc32, table_checksum(out));
   return out;
 }
 

@@ -1,0 +1,75 @@
+#!/usr/bin/env bash
+# End-to-end test of the gabarit CLI: synth -> tables build -> track -> eval
+# on the issue's acceptance scenario, plus the CLI's error behaviour.
+# Usage: end_to_end.sh PATH/TO/gabarit
+set -euo pipefail
+g=${1:?usage: end_to_end.sh PATH/TO/gabarit}
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+fail() { echo "FAIL: $*" >&2; exit 1; }
+
+# Expect exit code $1 from the rest of the command line, and stderr matching $2.
+expect() {
+  local want=$1 pattern=$2; shift 2
+  local rc=0
+  "$@" >"$work/out" 2>"$work/err" || rc=$?
+  [ "$rc" = "$want" ] || fail "'$*' exited $rc, want $want: $(cat "$work/err")"
+  grep -q -- "$pattern" "$work/err" || fail "'$*' stderr lacks '$pattern': $(cat "$work/err")"
+}
+
+# Help everywhere, exit 0.
+for cmd in "tables build" "tables inspect" synth track eval; do
+  $g $cmd --help | grep -q "^usage: gabarit $cmd" || fail "$cmd --help"
+done
+$g --help | grep -q "tables build" || fail "gabarit --help"
+
+# The acceptance scenario at 0% and 30% noise.
+for noise in 0 0.3; do
+  d="$work/seq$noise"
+  $g synth --shape random --points 200 --frames 120 --max-step 4 --noise $noise --seed 5 -o "$d" 2>/dev/null
+  head -1 "$d/gt.csv" | grep -qx "frame,x,y,theta_deg,depth,visible" || fail "gt.csv header"
+  $g tables build --model "$d/model.pgm" --binary --x -5:5:11 --y -5:5:11 -o "$d/t.gbt" 2>/dev/null
+  init=$(sed -n 2p "$d/gt.csv" | cut -d, -f2,3)
+  $g track --table "$d/t.gbt" --frames "$d/frames.y4m" --init "$init" -o "$d/poses.csv" --stats "$d/stats.json" 2>/dev/null
+  head -1 "$d/poses.csv" | grep -qx "frame,x,y,theta_deg,depth,votes,score,status" || fail "poses.csv header"
+  [ "$(wc -l < "$d/poses.csv")" = 121 ] || fail "poses.csv rows"
+  for key in frames per_frame_us mean p50 p99 max; do grep -q "\"$key\"" "$d/stats.json" || fail "stats.json lacks $key"; done
+  $g eval --poses "$d/poses.csv" --gt "$d/gt.csv" --require-exact > "$d/acc.json" || fail "not exact at noise $noise: $(cat "$d/acc.json")"
+done
+
+# A directory of PGM frames tracks like the Y4M it came from (and tables are byte-identical per seed).
+d="$work/seq0.3"
+$g tables build --model-points "$d/model.csv" --binary --x -5:5:11 --y -5:5:11 --keep 0.5 --seed 3 -o "$work/a.gbt" 2>/dev/null
+$g tables build --model-points "$d/model.csv" --binary --x -5:5:11 --y -5:5:11 --keep 0.5 --seed 3 -o "$work/b.gbt" 2>/dev/null
+cmp -s "$work/a.gbt" "$work/b.gbt" || fail "tables differ for one seed"
+$g tables inspect "$work/a.gbt" > "$work/inspect.json"
+for key in cells references bytes bytes_per_cell refs_per_pixel_histogram stencil_sizes; do
+  grep -q "\"$key\"" "$work/inspect.json" || fail "inspect lacks $key"
+done
+python3 -c 'import json,sys; json.load(open(sys.argv[1]))' "$work/inspect.json" 2>/dev/null || [ $? = 127 ] || fail "inspect output is not JSON"
+
+# Errors: usage errors exit 2, bad input exits 1, each naming the problem.
+expect 2 "unknown command" $g frobnicate
+expect 2 "missing required option --x" $g tables build --model-points "$d/model.csv" --binary --y 0:0:1 -o "$work/x.gbt"
+expect 2 "want MIN:MAX:CELLS" $g tables build --model-points "$d/model.csv" --binary --x 5 --y 0:0:1 -o "$work/x.gbt"
+expect 2 "one cell needs MIN == MAX" $g tables build --model-points "$d/model.csv" --binary --x 0:3:1 --y 0:0:1 -o "$work/x.gbt"
+expect 2 "keep" $g tables build --model-points "$d/model.csv" --binary --x 0:0:1 --y 0:0:1 --keep 1.5 -o "$work/x.gbt"
+expect 2 "--binary or --threshold" $g tables build --model-points "$d/model.csv" --x 0:0:1 --y 0:0:1 -o "$work/x.gbt"
+expect 1 "cannot open" $g tables build --model "$work/missing.pgm" --x 0:0:1 --y 0:0:1 -o "$work/x.gbt"
+printf 'P5\n4 4\n255\nabc' > "$work/short.pgm"
+expect 1 "truncated PGM" $g tables build --model "$work/short.pgm" --binary --x 0:0:1 --y 0:0:1 -o "$work/x.gbt"
+printf 'x,y\n1,2\n3,oops\n' > "$work/bad.csv"
+expect 1 "bad.csv:3" $g tables build --model-points "$work/bad.csv" --binary --x 0:0:1 --y 0:0:1 -o "$work/x.gbt"
+head -c 1000 "$work/a.gbt" > "$work/trunc.gbt"
+expect 1 "truncated" $g tables inspect "$work/trunc.gbt"
+cp "$work/a.gbt" "$work/flip.gbt"
+printf '\xff' | dd of="$work/flip.gbt" bs=1 seek=300 conv=notrunc 2>/dev/null
+expect 1 "bad-checksum" $g track --table "$work/flip.gbt" --frames "$d/frames.y4m" --init 1,1
+expect 1 "not a gabarit\|bad-magic" $g tables inspect "$d/gt.csv"
+expect 2 "--init" $g track --table "$work/a.gbt" --frames "$d/frames.y4m" --init 1
+expect 1 "not a Y4M" $g track --table "$work/a.gbt" --frames "$d/gt.csv" --init 1,1
+printf 'YUV4MPEG2 W8 H8 C422\nFRAME\n' > "$work/c422.y4m"
+expect 1 "C422 not supported" $g track --table "$work/a.gbt" --frames "$work/c422.y4m" --init 1,1
+printf 'YUV4MPEG2 W8 H8 Cmono\nFRAME\nabc' > "$work/cut.y4m"
+expect 1 "frame 0: truncated" $g track --table "$work/a.gbt" --frames "$work/cut.y4m" --init 1,1
+echo "1 passed, 0 failed"

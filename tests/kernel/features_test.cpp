@@ -1,0 +1,110 @@
+#include "gabarit/features.hpp"
+
+#include <gtest/gtest.h>
+
+#include <vector>
+
+#include "gabarit/host/image_io.hpp"
+
+namespace gabarit {
+namespace {
+
+using host::GrayImage;
+
+std::vector<RoiPoint> run_binary(const GrayImage& img, ImageWindow w, std::size_t capacity, FeatureCount& count) {
+  std::vector<RoiPoint> out(capacity);
+  EXPECT_EQ(extract_binary(img.view(), w, out, count), Status::kOk);
+  out.resize(count.written);
+  return out;
+}
+
+TEST(Features, BinaryReportsNonZeroPixelsInWindowCoordinates) {
+  GrayImage img(10, 8);
+  img.at(3, 2) = 1;
+  img.at(7, 5) = 255;
+  FeatureCount c;
+  const auto f = run_binary(img, {2, 1, 6, 6}, 36, c);
+  ASSERT_EQ(f.size(), 2u);
+  EXPECT_EQ(f[0].col, 1);
+  EXPECT_EQ(f[0].row, 1);
+  EXPECT_EQ(f[1].col, 5);
+  EXPECT_EQ(f[1].row, 4);
+  EXPECT_EQ(c.dropped, 0u);
+}
+
+TEST(Features, WindowsPartlyOrWhollyOutsideTheImageAreClipped) {
+  GrayImage img(4, 4, 9);
+  FeatureCount c;
+  EXPECT_EQ(run_binary(img, {-2, -2, 4, 4}, 16, c).size(), 4u);  // only the 2x2 overlap
+  EXPECT_EQ(run_binary(img, {100, -50, 5, 5}, 25, c).size(), 0u);
+  EXPECT_EQ(run_binary(img, {-3, 3, 10, 10}, 100, c).size(), 4u);  // bottom row of the image
+}
+
+TEST(Features, OverflowIsCountedAndNothingIsWrittenPastCapacity) {
+  GrayImage img(5, 5, 1);
+  std::vector<RoiPoint> out(7, RoiPoint{999, 999});
+  FeatureCount c;
+  ASSERT_EQ(extract_binary(img.view(), {0, 0, 5, 5}, std::span(out).first(3), c), Status::kOk);
+  EXPECT_EQ(c.written, 3u);
+  EXPECT_EQ(c.dropped, 22u);
+  for (std::size_t i = 3; i < out.size(); ++i) EXPECT_EQ(out[i].col, 999);
+}
+
+TEST(Features, GradientRowsKeepsTheStrongestPixelOfEachRun) {
+  // A vertical step edge between columns 4 and 5: Sobel responds on columns 4
+  // and 5 with equal strength; the leftmost of the run is kept.
+  GrayImage img(12, 6);
+  for (std::uint32_t y = 0; y < 6; ++y)
+    for (std::uint32_t x = 5; x < 12; ++x) img.at(x, y) = 200;
+  std::vector<RoiPoint> out(72);
+  FeatureCount c;
+  ASSERT_EQ(extract_gradient_rows(img.view(), {0, 0, 12, 6}, 100, out, c), Status::kOk);
+  ASSERT_EQ(c.written, 4u);  // interior rows 1..4, one feature each
+  for (std::uint32_t i = 0; i < c.written; ++i) {
+    EXPECT_EQ(out[i].col, 4);
+    EXPECT_EQ(out[i].row, i + 1);
+  }
+}
+
+TEST(Features, GradientRowsPicksThePeakOfARamp) {
+  GrayImage img(9, 3);
+  const std::uint8_t row[9] = {0, 0, 10, 40, 120, 200, 230, 240, 240};
+  for (std::uint32_t y = 0; y < 3; ++y)
+    for (std::uint32_t x = 0; x < 9; ++x) img.at(x, y) = row[x];
+  std::uint16_t best = 0;
+  std::uint32_t best_x = 0;
+  for (std::uint32_t x = 1; x < 8; ++x) {
+    if (gradient_magnitude(img.view(), x, 1) > best) best = gradient_magnitude(img.view(), x, 1), best_x = x;
+  }
+  std::vector<RoiPoint> out(27);
+  FeatureCount c;
+  ASSERT_EQ(extract_gradient_rows(img.view(), {0, 0, 9, 3}, 1, out, c), Status::kOk);
+  ASSERT_EQ(c.written, 1u);
+  EXPECT_EQ(out[0].col, best_x);
+}
+
+TEST(Features, BorderPixelsAreNeverGradientFeatures) {
+  GrayImage img(6, 6);
+  for (std::uint32_t x = 0; x < 6; ++x) img.at(x, 0) = 255;  // an edge on the top border only
+  EXPECT_EQ(gradient_magnitude(img.view(), 0, 0), 0);
+  EXPECT_EQ(gradient_magnitude(img.view(), 5, 3), 0);
+  std::vector<RoiPoint> out(36);
+  FeatureCount c;
+  ASSERT_EQ(extract_gradient_rows(img.view(), {0, 0, 6, 6}, 1, out, c), Status::kOk);
+  for (std::uint32_t i = 0; i < c.written; ++i) EXPECT_GE(out[i].row, 1);
+}
+
+TEST(Features, RejectsBadArguments) {
+  GrayImage img(6, 6);
+  std::vector<RoiPoint> out(36);
+  FeatureCount c;
+  EXPECT_EQ(extract_gradient_rows(img.view(), {0, 0, 6, 6}, 0, out, c), Status::kInvalidArgument);
+  EXPECT_EQ(extract_binary(ImageView{}, {0, 0, 6, 6}, out, c), Status::kInvalidArgument);
+  EXPECT_EQ(extract_binary(img.view(), {0, 0, 0, 6}, out, c), Status::kInvalidArgument);
+  ImageView bad_stride = img.view();
+  bad_stride.stride = 3;
+  EXPECT_EQ(extract_binary(bad_stride, {0, 0, 6, 6}, out, c), Status::kInvalidArgument);
+}
+
+}  // namespace
+}  // namespace gabarit

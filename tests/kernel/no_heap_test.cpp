@@ -1,0 +1,133 @@
+// Proof that the kernel's entry points never allocate: malloc, calloc,
+// realloc, free and every operator new/delete are replaced in this binary;
+// while `armed`, any call is counted. Tables and buffers are prepared (with
+// the host allocator) before arming. A positive control proves the
+// interposer itself sees allocations, so this test can fail.
+//
+// Plain main() instead of GoogleTest: GoogleTest allocates in its assertions.
+
+#include <cstdio>
+#include <cstdlib>
+#include <new>
+#include <vector>
+
+#include "gabarit/features.hpp"
+#include "gabarit/host/image_io.hpp"
+#include "gabarit/tracker.hpp"
+#include "gabarit/voter.hpp"
+#include "test_tables.hpp"
+
+extern "C" {
+void* __libc_malloc(std::size_t);
+void* __libc_calloc(std::size_t, std::size_t);
+void* __libc_realloc(void*, std::size_t);
+void __libc_free(void*);
+}
+
+namespace {
+volatile bool armed = false;
+volatile unsigned long allocations = 0;
+void note() {
+  if (armed) allocations = allocations + 1;
+}
+}  // namespace
+
+extern "C" void* malloc(std::size_t n) {
+  note();
+  return __libc_malloc(n);
+}
+extern "C" void* calloc(std::size_t a, std::size_t b) {
+  note();
+  return __libc_calloc(a, b);
+}
+extern "C" void* realloc(void* p, std::size_t n) {
+  note();
+  return __libc_realloc(p, n);
+}
+extern "C" void free(void* p) {
+  if (p) note();
+  __libc_free(p);
+}
+void* operator new(std::size_t n) {
+  note();
+  if (void* p = __libc_malloc(n ? n : 1)) return p;
+  throw std::bad_alloc();
+}
+void* operator new[](std::size_t n) { return operator new(n); }
+void operator delete(void* p) noexcept { free(p); }
+void operator delete[](void* p) noexcept { free(p); }
+void operator delete(void* p, std::size_t) noexcept { free(p); }
+void operator delete[](void* p, std::size_t) noexcept { free(p); }
+
+namespace {
+
+int failures = 0;
+
+template <class F>
+void expect_no_allocation(const char* what, F&& f) {
+  allocations = 0;
+  armed = true;
+  const bool ok = f();
+  armed = false;
+  if (!ok || allocations != 0) {
+    std::printf("FAIL %s: ok=%d allocations=%lu\n", what, ok, allocations);
+    ++failures;
+  } else {
+    std::printf("ok   %s\n", what);
+  }
+}
+
+}  // namespace
+
+int main() {
+  using namespace gabarit;
+  host::Rng rng(1);
+  const auto pts = testing::random_points(rng, 50, 12);
+  const auto bytes = testing::build(testing::point_model(pts), "-4:4:9", "-4:4:9", "-4:4:3");
+  TableView table;
+  if (TableView::open(bytes, table) != Status::kOk) return 2;
+  host::GrayImage frame(64, 64);
+  for (const auto& p : pts) frame.at(static_cast<std::uint32_t>(32 + p.x), static_cast<std::uint32_t>(32 + p.y)) = 255;
+  std::vector<RoiPoint> features(tracker_feature_capacity(table));
+  std::vector<VoteCounter> counters(voter_counter_count(table.cell_count()));
+  std::vector<std::uint8_t> mask(tracker_mask_bytes(table));
+  std::vector<CellScore> top(5);
+  const TrackerScratch scratch{features, counters, mask};
+  const ImageView view = frame.view();
+  const ImageWindow window{0, 0, 64, 64};
+
+  // Positive control: the interposer must see a plain allocation.
+  allocations = 0;
+  armed = true;
+  int* probe = new int(7);
+  armed = false;
+  delete probe;
+  if (allocations == 0) {
+    std::printf("FAIL interposer did not observe operator new\n");
+    return 1;
+  }
+
+  expect_no_allocation("TableView::open", [&] { TableView t; return TableView::open(bytes, t) == Status::kOk; });
+  expect_no_allocation("extract_binary", [&] { FeatureCount c; return extract_binary(view, window, features, c) == Status::kOk; });
+  expect_no_allocation("extract_gradient_rows", [&] {
+    FeatureCount c;
+    return extract_gradient_rows(view, window, 100, features, c) == Status::kOk;
+  });
+  expect_no_allocation("voting and ranking", [&] {
+    FeatureCount c;
+    if (extract_binary(view, {32 + table.roi_origin_x(), 32 + table.roi_origin_y(), table.roi_width(), table.roi_height()},
+                       features, c) != Status::kOk) return false;
+    VoteTally tally;
+    return clear_counters(table, counters) == Status::kOk &&
+           accumulate_votes(table, std::span(features).first(c.written), counters, tally) == Status::kOk &&
+           accumulate_votes_reference(table, std::span(features).first(c.written), counters, tally) == Status::kOk &&
+           select_top_cells(table, counters, top) == Status::kOk;
+  });
+  expect_no_allocation("track_step", [&] { StepResult r; return track_step(table, view, Pose{32, 32, 0, 0}, scratch, r) == Status::kOk; });
+  expect_no_allocation("track_step, rotated", [&] {
+    StepResult r;
+    return track_step(table, view, Pose{32, 32, 3.5f, 0}, scratch, r) == Status::kOk;
+  });
+  std::printf("%d passed, %d failed\n", 6 - failures, failures);
+  return failures == 0 ? 0 : 1;
+}

@@ -1,0 +1,228 @@
+// The table loader must reject every damaged table with a distinct error and
+// never read outside the buffer it is given (this suite runs under
+// AddressSanitizer in CI; each candidate sits in an exact-size heap buffer so
+// one byte past the end is caught).
+#include "gabarit/table_view.hpp"
+
+#include <gtest/gtest.h>
+
+#include <set>
+#include <vector>
+
+#include "gabarit/byte_order.hpp"
+#include "gabarit/voter.hpp"
+#include "test_tables.hpp"
+
+namespace gabarit {
+namespace {
+
+namespace off = table_format::offset;
+using testing::build;
+using testing::point_model;
+using testing::reseal;
+
+std::vector<std::byte> small_table() {
+  host::Rng rng(11);
+  return build(point_model(testing::random_points(rng, 12, 6)), "-2:2:5", "-1:1:3");
+}
+
+Status open_copy(const std::vector<std::byte>& bytes) {
+  const std::vector<std::byte> exact(bytes.begin(), bytes.end());  // exact-size allocation for ASan
+  TableView v;
+  return TableView::open(exact, v);
+}
+
+TEST(TableView, OpensAWellFormedTableAndReadsItBack) {
+  host::Rng rng(3);
+  const auto pts = testing::random_points(rng, 20, 8);
+  const auto bytes = build(point_model(pts), "-3:3:7", "-2:2:5");
+  const TableView t = testing::open_table(bytes);
+  EXPECT_EQ(t.cell_count(), 35u);
+  EXPECT_EQ(t.reference_bytes(), 1);
+  EXPECT_EQ(t.model_point_count(), 20u);
+  EXPECT_EQ(t.axis_x().cells, 7u);
+  EXPECT_EQ(t.cell(0).x_lo, -3.5f);
+  EXPECT_EQ(t.cell(34).y_hi, 2.5f);
+  EXPECT_EQ(t.stencil_size(0), 20u);
+  EXPECT_EQ(t.references_begin(t.roi_pixels()), t.reference_count());
+  for (std::uint32_t i = 0; i < t.model_point_count(); ++i) {
+    EXPECT_EQ(t.model_point(i).x, pts[i].x);
+    EXPECT_EQ(t.model_point(i).y, pts[i].y);
+  }
+}
+
+TEST(TableView, ReadsAtAnyAlignment) {
+  const auto bytes = small_table();
+  for (std::size_t shift = 1; shift < 8; ++shift) {
+    std::vector<std::byte> buffer(bytes.size() + shift);
+    std::copy(bytes.begin(), bytes.end(), buffer.begin() + static_cast<std::ptrdiff_t>(shift));
+    TableView t;
+    ASSERT_EQ(TableView::open(std::span(buffer).subspan(shift), t), Status::kOk) << "shift " << shift;
+    EXPECT_EQ(t.cell(3).x_lo, testing::open_table(bytes).cell(3).x_lo);
+  }
+}
+
+TEST(TableView, RejectsEveryTruncation) {
+  const auto bytes = small_table();
+  for (std::size_t n = 0; n < bytes.size(); ++n) {
+    EXPECT_EQ(open_copy({bytes.begin(), bytes.begin() + static_cast<std::ptrdiff_t>(n)}), Status::kTruncated) << "length " << n;
+  }
+}
+
+TEST(TableView, RejectsTrailingBytes) {
+  auto bytes = small_table();
+  bytes.push_back(std::byte{0});
+  EXPECT_EQ(open_copy(bytes), Status::kSizeMismatch);
+}
+
+TEST(TableView, RejectsEveryBitFlipWithTheErrorOfTheFieldHit) {
+  const auto bytes = small_table();
+  for (std::size_t byte = 0; byte < bytes.size(); ++byte) {
+    for (int bit = 0; bit < 8; ++bit) {
+      auto bad = bytes;
+      bad[byte] ^= std::byte(1u << bit);
+      const Status s = open_copy(bad);
+      if (byte < off::kVersionMajor) {
+        EXPECT_EQ(s, Status::kBadMagic) << byte;
+      } else if (byte < off::kVersionMinor) {
+        EXPECT_EQ(s, Status::kUnsupportedVersion) << byte;
+      } else if (byte >= off::kHeaderBytes && byte < off::kFileBytes) {
+        EXPECT_EQ(s, Status::kBadHeaderField) << byte;
+      } else if (byte >= off::kFileBytes && byte < off::kCrc32) {
+        EXPECT_TRUE(s == Status::kTruncated || s == Status::kSizeMismatch) << byte << " " << status_name(s);
+      } else {
+        EXPECT_EQ(s, Status::kBadChecksum) << "byte " << byte << " bit " << bit << ": " << status_name(s);
+      }
+    }
+  }
+}
+
+TEST(TableView, RejectsOtherVersionsButAcceptsANewerMinor) {
+  auto bytes = small_table();
+  store_le<std::uint16_t>(bytes.data() + off::kVersionMajor, 2);
+  EXPECT_EQ(open_copy(bytes), Status::kUnsupportedVersion);
+  store_le<std::uint16_t>(bytes.data() + off::kVersionMajor, 0);
+  EXPECT_EQ(open_copy(bytes), Status::kUnsupportedVersion);
+  bytes = small_table();
+  store_le<std::uint16_t>(bytes.data() + off::kVersionMinor, 7);  // minor versions only add meaning to reserved fields
+  reseal(bytes);
+  EXPECT_EQ(open_copy(bytes), Status::kOk);
+}
+
+struct Edit {
+  const char* what;
+  std::size_t at;
+  std::uint32_t value;
+  int width;  // bytes
+  Status expected;
+};
+
+TEST(TableView, RejectsCraftedHeadersWithAValidChecksum) {
+  const auto good = small_table();
+  const TableView t = testing::open_table(good);
+  const Edit edits[] = {
+      {"cell count over the limit", off::kCellCount, table_format::kMaxCells + 1, 4, Status::kCountTooLarge},
+      {"reference count over the limit", off::kReferenceCount, table_format::kMaxReferences + 1, 4, Status::kCountTooLarge},
+      {"ROI over the limit", off::kRoiWidth, 0xFFFFFFFFu /* 65535 x 65535 */, 4, Status::kCountTooLarge},
+      {"model points over the limit", off::kModelPointCount, table_format::kMaxModelPoints + 1, 4, Status::kCountTooLarge},
+      {"cell count disagreeing with the space", off::kCellCount, t.cell_count() + 1, 4, Status::kSizeMismatch},
+      {"reference count beyond the file", off::kReferenceCount, t.reference_count() + 100000, 4, Status::kSectionOutOfBounds},
+      {"zero cells", off::kCellCount, 0, 4, Status::kBadHeaderField},
+      {"flags set", off::kFlags, 1, 4, Status::kBadHeaderField},
+      {"reference width not the narrowest", off::kReferenceBytes, 2, 1, Status::kBadHeaderField},
+      {"unknown detector", off::kDetectorKind, 9, 1, Status::kBadHeaderField},
+      {"zero x cells", off::kAxisX + 8, 0, 4, Status::kBadHeaderField},
+      {"keep ratio above 1", off::kKeepRatio, 0x40000000u /* 2.0f */, 4, Status::kBadHeaderField},
+      {"section moved", off::kReferencesOffset, 8, 4, Status::kSectionOutOfBounds},
+      {"max stencil size wrong", off::kMaxStencilSize, 3, 4, Status::kStencilSizeMismatch},
+      {"reserved byte set", off::kReserved140 + 5, 1, 1, Status::kBadHeaderField},
+  };
+  for (const Edit& e : edits) {
+    auto bad = good;
+    std::byte* p = bad.data() + e.at;
+    if (e.width == 1) store_le<std::uint8_t>(p, static_cast<std::uint8_t>(e.value));
+    if (e.width == 2) store_le<std::uint16_t>(p, static_cast<std::uint16_t>(e.value));
+    if (e.width == 4) store_le<std::uint32_t>(p, e.value);
+    reseal(bad);
+    EXPECT_EQ(open_copy(bad), e.expected) << e.what << ": got " << status_name(open_copy(bad));
+  }
+}
+
+TEST(TableView, RejectsCraftedPayloadsWithAValidChecksum) {
+  const auto good = small_table();
+  const std::uint32_t offsets_at = load_le<std::uint32_t>(good.data() + off::kPixelOffsetsOffset);
+  const std::uint32_t refs_at = load_le<std::uint32_t>(good.data() + off::kReferencesOffset);
+  const std::uint32_t cells_at = load_le<std::uint32_t>(good.data() + off::kCellsOffset);
+  const TableView t = testing::open_table(good);
+  // Find a pixel with at least two references.
+  std::uint32_t pixel = 0;
+  while (t.references_begin(pixel + 1) - t.references_begin(pixel) < 2) ++pixel;
+  const std::uint32_t first = t.references_begin(pixel);
+
+  auto bad = good;
+  store_le<std::uint8_t>(bad.data() + refs_at + first, static_cast<std::uint8_t>(t.cell_count()));
+  reseal(bad);
+  EXPECT_EQ(open_copy(bad), Status::kReferenceOutOfRange);
+
+  bad = good;
+  store_le<std::uint8_t>(bad.data() + refs_at + first + 1, static_cast<std::uint8_t>(t.reference(first)));
+  reseal(bad);
+  EXPECT_EQ(open_copy(bad), Status::kReferencesNotSorted);
+
+  bad = good;
+  store_le<std::uint32_t>(bad.data() + offsets_at + 4 * (pixel + 1), t.reference_count() + 5);
+  reseal(bad);
+  EXPECT_EQ(open_copy(bad), Status::kOffsetsNotMonotonic);
+
+  bad = good;
+  store_le<std::uint32_t>(bad.data() + offsets_at, 1);
+  reseal(bad);
+  EXPECT_EQ(open_copy(bad), Status::kOffsetsNotMonotonic);
+
+  bad = good;
+  store_le<std::uint32_t>(bad.data() + cells_at + table_format::cell_offset::kStencilSize, t.stencil_size(0) + 1);
+  reseal(bad);
+  EXPECT_EQ(open_copy(bad), Status::kStencilSizeMismatch);
+
+  bad = good;
+  store_le<std::uint16_t>(bad.data() + cells_at + table_format::cell_offset::kDepth, 1);
+  reseal(bad);
+  EXPECT_EQ(open_copy(bad), Status::kBadHeaderField);
+
+  bad = good;
+  store_le<std::uint32_t>(bad.data() + cells_at + table_format::cell_offset::kXLo, 0x7FC00000u);  // NaN
+  reseal(bad);
+  EXPECT_EQ(open_copy(bad), Status::kBadHeaderField);
+}
+
+TEST(TableView, RandomResealedCorruptionNeverCrashesAndWhatOpensIsUsable) {
+  const auto good = small_table();
+  host::Rng rng(2024);
+  std::set<Status> seen;
+  for (int round = 0; round < 3000; ++round) {
+    auto bad = good;
+    const int edits = 1 + static_cast<int>(rng.next_u32() % 4);
+    for (int e = 0; e < edits; ++e) {
+      bad[rng.next_u32() % bad.size()] = static_cast<std::byte>(rng.next_u32());
+    }
+    reseal(bad);
+    const std::vector<std::byte> exact(bad.begin(), bad.end());
+    TableView v;
+    const Status s = TableView::open(exact, v);
+    seen.insert(s);
+    if (s == Status::kOk) {
+      // Whatever validated must be safe to vote with, every pixel a feature.
+      std::vector<RoiPoint> all;
+      for (std::uint16_t r = 0; r < v.roi_height(); ++r)
+        for (std::uint16_t c = 0; c < v.roi_width(); ++c) all.push_back({c, r});
+      std::vector<VoteCounter> counters(v.cell_count());
+      VoteTally tally;
+      ASSERT_EQ(accumulate_votes(v, all, counters, tally), Status::kOk);
+      ASSERT_EQ(tally.votes, v.reference_count());
+    }
+  }
+  EXPECT_GE(seen.size(), 4u);  // the corruption reached several distinct checks
+}
+
+}  // namespace
+}  // namespace gabarit

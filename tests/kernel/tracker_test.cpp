@@ -1,0 +1,135 @@
+#include "gabarit/tracker.hpp"
+
+#include <gtest/gtest.h>
+
+#include <vector>
+
+#include "gabarit/deterministic_math.hpp"
+#include "gabarit/host/image_io.hpp"
+#include "test_tables.hpp"
+
+namespace gabarit {
+namespace {
+
+using host::GrayImage;
+using testing::build;
+using testing::point_model;
+
+struct Scratch {
+  explicit Scratch(const TableView& t)
+      : features(tracker_feature_capacity(t)), counters(voter_counter_count(t.cell_count())), mask(tracker_mask_bytes(t)) {}
+  TrackerScratch view() { return {features, counters, mask}; }
+  std::vector<RoiPoint> features;
+  std::vector<VoteCounter> counters;
+  std::vector<std::uint8_t> mask;
+};
+
+GrayImage draw(const std::vector<host::Point>& pts, float x, float y, float theta_deg, std::uint32_t size = 96) {
+  GrayImage img(size, size);
+  const SinCos sc = sin_cos_deg(theta_deg);
+  for (const host::Point& p : pts) {
+    const auto px = round_to_int(x + sc.cos * static_cast<float>(p.x) - sc.sin * static_cast<float>(p.y));
+    const auto py = round_to_int(y + sc.sin * static_cast<float>(p.x) + sc.cos * static_cast<float>(p.y));
+    if (px >= 0 && py >= 0 && px < static_cast<std::int32_t>(size) && py < static_cast<std::int32_t>(size)) {
+      img.at(static_cast<std::uint32_t>(px), static_cast<std::uint32_t>(py)) = 255;
+    }
+  }
+  return img;
+}
+
+TEST(Tracker, FindsATranslationExactly) {
+  host::Rng rng(21);
+  const auto pts = testing::random_points(rng, 60, 15);
+  const auto bytes = build(point_model(pts), "-5:5:11", "-5:5:11");
+  const TableView t = testing::open_table(bytes);
+  Scratch s(t);
+  for (int dx = -5; dx <= 5; dx += 2) {
+    for (int dy = -5; dy <= 5; dy += 3) {
+      const GrayImage frame = draw(pts, 48.0f + static_cast<float>(dx), 47.0f + static_cast<float>(dy), 0);
+      StepResult r;
+      ASSERT_EQ(track_step(t, frame.view(), Pose{48, 47, 0, 0}, s.view(), r), Status::kOk);
+      EXPECT_EQ(r.pose.x, 48.0f + static_cast<float>(dx));
+      EXPECT_EQ(r.pose.y, 47.0f + static_cast<float>(dy));
+      EXPECT_EQ(r.best.votes, pts.size());
+      EXPECT_EQ(r.state, TrackState::kTracking);
+      EXPECT_EQ(r.features, pts.size());
+      EXPECT_FLOAT_EQ(r.score, 1.0f);
+    }
+  }
+}
+
+TEST(Tracker, ReportsLostOnAnEmptyFrameAndUncertainOnATie) {
+  const auto bytes = build(point_model({{0, 0}, {2, 0}}), "-2:2:5", "0:0:1");
+  const TableView t = testing::open_table(bytes);
+  Scratch s(t);
+  StepResult r;
+  GrayImage empty(32, 32);
+  ASSERT_EQ(track_step(t, empty.view(), Pose{16, 16, 0, 0}, s.view(), r), Status::kOk);
+  EXPECT_EQ(r.state, TrackState::kLost);
+  EXPECT_EQ(r.best.votes, 0);
+  // A single lit pixel is explained equally well by translations 0 and -2.
+  GrayImage one(32, 32);
+  one.at(16, 16) = 255;
+  ASSERT_EQ(track_step(t, one.view(), Pose{16, 16, 0, 0}, s.view(), r), Status::kOk);
+  EXPECT_EQ(r.state, TrackState::kUncertain);
+}
+
+TEST(Tracker, EstimatesRotationAndTracksInTheRotatedFrame) {
+  host::Rng rng(8);
+  const auto pts = testing::random_points(rng, 80, 14, 1.5);
+  const auto bytes = build(point_model(pts), "-3:3:7", "-3:3:7", "-10:10:5");
+  const TableView t = testing::open_table(bytes);
+  Scratch s(t);
+  StepResult r;
+  // From theta = 0 the object turned by 10 degrees and moved by (2, -1).
+  GrayImage frame = draw(pts, 50, 45, 10.0f);
+  ASSERT_EQ(track_step(t, frame.view(), Pose{48, 46, 0, 0}, s.view(), r), Status::kOk);
+  EXPECT_EQ(r.pose.theta_deg, 10.0f);
+  EXPECT_EQ(r.pose.x, 50.0f);
+  EXPECT_EQ(r.pose.y, 45.0f);
+  // From theta = 10 the object turned by another 5 and moved by (-2, 2): the
+  // features are taken into the table frame by R(-10).
+  frame = draw(pts, 48, 47, 15.0f);
+  ASSERT_EQ(track_step(t, frame.view(), r.pose, s.view(), r), Status::kOk);
+  EXPECT_NEAR(r.pose.theta_deg, 15.0f, 1e-5);
+  EXPECT_NEAR(r.pose.x, 48.0f, 1.0f);
+  EXPECT_NEAR(r.pose.y, 47.0f, 1.0f);
+  EXPECT_EQ(r.features_dropped, 0u);
+}
+
+TEST(Tracker, CountsFeaturesDroppedByASmallBuffer) {
+  const auto bytes = build(point_model({{0, 0}, {1, 0}}), "-1:1:3", "-1:1:3");
+  const TableView t = testing::open_table(bytes);
+  std::vector<RoiPoint> features(2);
+  std::vector<VoteCounter> counters(t.cell_count());
+  GrayImage full(16, 16, 255);
+  StepResult r;
+  ASSERT_EQ(track_step(t, full.view(), Pose{8, 8, 0, 0}, {features, counters, {}}, r), Status::kOk);
+  EXPECT_EQ(r.features, 2u);
+  EXPECT_EQ(r.features_dropped, t.roi_pixels() - 2);
+}
+
+TEST(Tracker, RejectsBadArguments) {
+  const auto bytes = build(point_model({{0, 0}, {1, 0}}), "-1:1:3", "-1:1:3");
+  const TableView t = testing::open_table(bytes);
+  Scratch s(t);
+  GrayImage img(16, 16);
+  StepResult r;
+  EXPECT_EQ(track_step(t, ImageView{}, Pose{}, s.view(), r), Status::kInvalidArgument);
+  EXPECT_EQ(track_step(t, img.view(), Pose{0.0f / 0.0f, 0, 0, 0}, s.view(), r), Status::kInvalidArgument);
+  EXPECT_EQ(track_step(t, img.view(), Pose{1e9f, 0, 0, 0}, s.view(), r), Status::kInvalidArgument);
+  EXPECT_EQ(track_step(t, img.view(), Pose{8, 8, 5, 0}, {s.features, s.counters, {}}, r), Status::kBufferTooSmall);
+  EXPECT_EQ(track_step(t, img.view(), Pose{8, 8, 0, 0}, {s.features, {}, s.mask}, r), Status::kBufferTooSmall);
+  EXPECT_EQ(track_step(t, Detector{table_format::DetectorKind::kGradientRows, 0}, img.view(), Pose{8, 8, 0, 0}, s.view(), r),
+            Status::kInvalidArgument);
+}
+
+TEST(Tracker, ScratchSizesAreCompileTimeFormulas) {
+  static_assert(tracker_window_side(11, 11, -5, -5) == 2 * 8 + 1);  // corner (5,5): r = 7.07 -> 8
+  static_assert(tracker_feature_capacity(4, 4, 0, 0) == 11 * 11);   // corner (3,3): r = 4.24 -> 5, side 11
+  static_assert(tracker_mask_bytes(3, 3) == 2);
+  SUCCEED();
+}
+
+}  // namespace
+}  // namespace gabarit

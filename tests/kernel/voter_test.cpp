@@ -1,0 +1,169 @@
+#include "gabarit/voter.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <vector>
+
+#include "test_tables.hpp"
+
+namespace gabarit {
+namespace {
+
+using testing::build;
+using testing::point_model;
+
+std::vector<RoiPoint> random_features(host::Rng& rng, const TableView& t, double density) {
+  std::vector<RoiPoint> f;
+  for (std::uint16_t r = 0; r < t.roi_height(); ++r)
+    for (std::uint16_t c = 0; c < t.roi_width(); ++c)
+      if (rng.bernoulli(density)) f.push_back({c, r});
+  return f;
+}
+
+// Awkward tables: 1-, 2- and 4-byte references, pixel lists of every length
+// mod 4, features counts from 0 up.
+struct Case {
+  const char* name;
+  std::size_t points;
+  const char* x;
+  const char* y;
+  const char* theta;
+  std::uint8_t ref_bytes;
+};
+
+TEST(Voter, UnrolledMatchesTheScalarReferenceBitForBit) {
+  const Case cases[] = {
+      {"1-byte refs", 25, "-4:4:9", "-3:3:7", "0:0:1", 1},
+      {"1-byte refs, rotation", 9, "-1:1:3", "-1:1:3", "-6:6:5", 1},
+      {"2-byte refs", 7, "-15:15:31", "-9:9:19", "0:0:1", 2},
+      {"4-byte refs", 1, "0:256:257", "0:255:256", "0:0:1", 4},
+  };
+  for (const Case& c : cases) {
+    host::Rng rng(77);
+    const auto bytes = build(point_model(testing::random_points(rng, c.points, 10)), c.x, c.y, c.theta);
+    const TableView t = testing::open_table(bytes);
+    ASSERT_EQ(t.reference_bytes(), c.ref_bytes) << c.name;
+    for (double density : {0.0, 0.001, 0.05, 0.3, 1.0}) {
+      auto features = random_features(rng, t, density);
+      for (std::size_t n : {features.size(), features.size() / 3, std::size_t{1}, std::size_t{3}}) {
+        const std::span<const RoiPoint> f = std::span(features).first(std::min(n, features.size()));
+        std::vector<VoteCounter> a(t.cell_count(), 7), b(t.cell_count(), 7);  // non-zero start: accumulate
+        VoteTally ta, tb;
+        ASSERT_EQ(accumulate_votes_reference(t, f, a, ta), Status::kOk);
+        ASSERT_EQ(accumulate_votes(t, f, b, tb), Status::kOk);
+        ASSERT_EQ(a, b) << c.name << " density " << density << " n " << n;
+        EXPECT_EQ(ta.votes, tb.votes);
+        EXPECT_EQ(ta.features, f.size());
+      }
+    }
+  }
+}
+
+TEST(Voter, CountsEachFeatureOncePerCellItsPixelLists) {
+  host::Rng rng(5);
+  const auto bytes = build(point_model(testing::random_points(rng, 30, 12)), "-3:3:7", "-3:3:7");
+  const TableView t = testing::open_table(bytes);
+  const auto features = random_features(rng, t, 0.2);
+  std::vector<VoteCounter> counters(t.cell_count(), 0);
+  VoteTally tally;
+  ASSERT_EQ(accumulate_votes(t, features, counters, tally), Status::kOk);
+  std::vector<VoteCounter> expected(t.cell_count(), 0);
+  std::uint64_t refs = 0;
+  for (const RoiPoint& f : features) {
+    const std::uint32_t p = std::uint32_t{f.row} * t.roi_width() + f.col;
+    for (std::uint32_t i = t.references_begin(p); i < t.references_begin(p + 1); ++i) ++expected[t.reference(i)], ++refs;
+  }
+  EXPECT_EQ(counters, expected);
+  EXPECT_EQ(tally.votes, refs);
+}
+
+TEST(Voter, TiesResolveToTheLowestCellIndex) {
+  // One model point and 1-pixel cells: every stencil is one pixel, so voting
+  // for every pixel gives every cell exactly one vote.
+  const auto bytes = build(point_model({{0, 0}}), "-2:2:5", "-2:2:5");
+  const TableView t = testing::open_table(bytes);
+  std::vector<VoteCounter> counters(t.cell_count(), 1);
+  CellScore top[3];
+  ASSERT_EQ(select_top_cells(t, counters, top), Status::kOk);
+  EXPECT_EQ(top[0].cell, 0u);
+  EXPECT_EQ(top[1].cell, 1u);
+  EXPECT_EQ(top[2].cell, 2u);
+  counters[17] = 2;
+  counters[9] = 2;
+  ASSERT_EQ(select_top_cells(t, counters, top), Status::kOk);
+  EXPECT_EQ(top[0].cell, 9u);
+  EXPECT_EQ(top[1].cell, 17u);
+  EXPECT_EQ(top[2].cell, 0u);
+}
+
+TEST(Voter, RanksByVotesRelativeToStencilSize) {
+  const CellScore small{5, 9, 10};   // 0.9
+  const CellScore big{2, 80, 100};   // 0.8
+  EXPECT_TRUE(ranks_before(small, big));
+  EXPECT_FALSE(ranks_before(big, small));
+  const CellScore same_ratio_lower_index{1, 45, 50};  // 0.9, lower index
+  EXPECT_TRUE(ranks_before(same_ratio_lower_index, small));
+  EXPECT_TRUE(scores_equal(same_ratio_lower_index, small));
+  const CellScore empty_stencil{0, 0, 0};
+  EXPECT_TRUE(ranks_before(big, empty_stencil));  // 0/0 reads as 0, not a tie
+  EXPECT_FLOAT_EQ(normalised_score(small), 0.9f);
+}
+
+TEST(Voter, TopKIsTheSortedOrderOfAllCells) {
+  host::Rng rng(9);
+  const auto bytes = build(point_model(testing::random_points(rng, 40, 12)), "-5:5:11", "-5:5:11", "0:0:1", 0.3, 4);
+  const TableView t = testing::open_table(bytes);
+  for (int round = 0; round < 20; ++round) {
+    std::vector<VoteCounter> counters(t.cell_count());
+    for (auto& c : counters) c = static_cast<VoteCounter>(rng.next_u32() % 12);  // many ties
+    std::vector<CellScore> all;
+    for (std::uint32_t c = 0; c < t.cell_count(); ++c) all.push_back({c, counters[c], t.stencil_size(c)});
+    std::sort(all.begin(), all.end(), ranks_before);
+    std::vector<CellScore> top(7);
+    ASSERT_EQ(select_top_cells(t, counters, top), Status::kOk);
+    for (std::size_t i = 0; i < top.size(); ++i) EXPECT_EQ(top[i].cell, all[i].cell) << "rank " << i;
+  }
+}
+
+TEST(Voter, CountersSaturateInsteadOfWrapping) {
+  const auto bytes = build(point_model({{0, 0}, {1, 0}}), "0:1:2", "0:0:1");
+  const TableView t = testing::open_table(bytes);
+  const std::vector<RoiPoint> same(70000, RoiPoint{1, 0});  // one pixel listed many times
+  for (auto vote : {&accumulate_votes_reference, &accumulate_votes}) {
+    std::vector<VoteCounter> counters(t.cell_count(), 0);
+    VoteTally tally;
+    ASSERT_EQ(vote(t, same, counters, tally), Status::kOk);
+    for (VoteCounter c : counters) EXPECT_TRUE(c == 0 || c == kVoteCounterMax);
+    EXPECT_EQ(*std::max_element(counters.begin(), counters.end()), kVoteCounterMax);
+  }
+}
+
+TEST(Voter, RejectsFeaturesOutsideTheRoiWithoutTouchingCounters) {
+  const auto bytes = build(point_model({{0, 0}, {2, 1}}), "-1:1:3", "-1:1:3");
+  const TableView t = testing::open_table(bytes);
+  std::vector<VoteCounter> counters(t.cell_count(), 3);
+  VoteTally tally;
+  const std::vector<RoiPoint> f = {{0, 0}, {t.roi_width(), 0}};
+  EXPECT_EQ(accumulate_votes(t, f, counters, tally), Status::kFeatureOutOfRoi);
+  EXPECT_EQ(accumulate_votes_reference(t, f, counters, tally), Status::kFeatureOutOfRoi);
+  EXPECT_EQ(std::count(counters.begin(), counters.end(), 3), static_cast<long>(t.cell_count()));
+  EXPECT_EQ(tally.votes, 0u);
+}
+
+TEST(Voter, RejectsWrongBufferSizes) {
+  const auto bytes = build(point_model({{0, 0}}), "-1:1:3", "0:0:1");
+  const TableView t = testing::open_table(bytes);
+  std::vector<VoteCounter> short_counters(t.cell_count() - 1);
+  VoteTally tally;
+  EXPECT_EQ(accumulate_votes(t, {}, short_counters, tally), Status::kBufferTooSmall);
+  EXPECT_EQ(clear_counters(t, short_counters), Status::kBufferTooSmall);
+  std::vector<VoteCounter> counters(t.cell_count());
+  std::vector<CellScore> too_many(t.cell_count() + 1);
+  EXPECT_EQ(select_top_cells(t, counters, too_many), Status::kInvalidArgument);
+  EXPECT_EQ(select_top_cells(t, counters, {}), Status::kInvalidArgument);
+  EXPECT_EQ(accumulate_votes(TableView{}, {}, counters, tally), Status::kInvalidArgument);
+}
+
+}  // namespace
+}  // namespace gabarit

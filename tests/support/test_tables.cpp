@@ -1,0 +1,58 @@
+#include "test_tables.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "gabarit/byte_order.hpp"
+#include "gabarit/host/state_space.hpp"
+
+namespace gabarit::testing {
+
+std::vector<host::Point> random_points(host::Rng& rng, std::size_t n, std::int32_t half, double min_distance) {
+  std::vector<host::Point> out;
+  for (int tries = 0; out.size() < n && tries < 200000; ++tries) {
+    const host::Point p{rng.uniform_int(-half, half), rng.uniform_int(-half, half)};
+    bool ok = true;
+    for (const host::Point& q : out) {
+      const double d = std::hypot(double(p.x - q.x), double(p.y - q.y));
+      if (d == 0 || d <= min_distance) {
+        ok = false;
+        break;
+      }
+    }
+    if (ok) out.push_back(p);
+  }
+  return out;
+}
+
+host::ModelStack point_model(std::vector<host::Point> points) {
+  host::ModelStack m;
+  m.depths.push_back(std::move(points));
+  m.detector.kind = table_format::DetectorKind::kBinary;
+  return m;
+}
+
+std::vector<std::byte> build(const host::ModelStack& model, const std::string& x, const std::string& y,
+                             const std::string& theta, double keep, std::uint64_t seed) {
+  host::BuildOptions o;
+  o.space.x = host::parse_axis(x, "x");
+  o.space.y = host::parse_axis(y, "y");
+  o.space.theta = host::parse_axis(theta, "theta");
+  o.keep = keep;
+  o.seed = seed;
+  return host::build_table(model, o);
+}
+
+TableView open_table(std::span<const std::byte> bytes) {
+  TableView view;
+  const Status s = TableView::open(bytes, view);
+  EXPECT_EQ(s, Status::kOk) << status_name(s);
+  return view;
+}
+
+void reseal(std::vector<std::byte>& table) {
+  store_le<std::uint32_t>(table.data() + table_format::offset::kCrc32, table_checksum(table));
+}
+
+}  // namespace gabarit::testing

@@ -1,0 +1,33 @@
+// Helpers shared by the tests: random shapes and tables built with the real
+// host builder, so every test exercises the production code paths.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "gabarit/host/model.hpp"
+#include "gabarit/host/rng.hpp"
+#include "gabarit/host/table_builder.hpp"
+#include "gabarit/table_view.hpp"
+
+namespace gabarit::testing {
+
+// n distinct points in [-half, half]^2 whose pairwise Euclidean distance is
+// > min_distance (best effort: gives up on a point after many tries).
+std::vector<host::Point> random_points(host::Rng& rng, std::size_t n, std::int32_t half, double min_distance = 0);
+
+host::ModelStack point_model(std::vector<host::Point> points);
+
+std::vector<std::byte> build(const host::ModelStack& model, const std::string& x, const std::string& y,
+                             const std::string& theta = "0:0:1", double keep = 1.0, std::uint64_t seed = 1);
+
+// Opens a table and fails the current test if it does not validate.
+TableView open_table(std::span<const std::byte> bytes);
+
+// Re-seals a deliberately edited table with a correct CRC, so structural
+// checks (not the CRC) are what rejects it.
+void reseal(std::vector<std::byte>& table);
+
+}  // namespace gabarit::testing
