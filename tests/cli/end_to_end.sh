@@ -48,6 +48,11 @@ for key in cells references bytes bytes_per_cell refs_per_pixel_histogram stenci
 done
 python3 -c 'import json,sys; json.load(open(sys.argv[1]))' "$work/inspect.json" 2>/dev/null || [ $? = 127 ] || fail "inspect output is not JSON"
 
+# A focus stack given as --model a b (two depths) builds one cell set per depth.
+$g tables build --model "$d/model.pgm" "$d/model.pgm" --binary --x -1:1:3 --y 0:0:1 -o "$work/stack.gbt" 2>/dev/null
+grep -q '"depths": 2' <($g tables inspect "$work/stack.gbt") || fail "two --model images did not make two depths"
+expect 2 "unexpected argument" $g tables build --model-points "$d/model.csv" stray.pgm --binary --x 0:0:1 --y 0:0:1 -o "$work/x.gbt"
+
 # Errors: usage errors exit 2, bad input exits 1, each naming the problem.
 expect 2 "unknown command" $g frobnicate
 expect 2 "missing required option --x" $g tables build --model-points "$d/model.csv" --binary --y 0:0:1 -o "$work/x.gbt"

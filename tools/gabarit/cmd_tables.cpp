@@ -31,7 +31,7 @@ Axis axis_argument(const Args& args, const std::string& name, const std::string&
 }  // namespace
 
 int tables_build(const std::vector<std::string>& argv) {
-  Args args("tables build", "(--model IMG.pgm ... | --model-points PTS.csv) --x MIN:MAX:CELLS --y MIN:MAX:CELLS [options] -o OUT",
+  Args args("tables build", "(--model IMG.pgm [IMG.pgm ...] | --model-points PTS.csv) --x MIN:MAX:CELLS --y MIN:MAX:CELLS [options] -o OUT",
             "Builds a stencil look-up table (docs/table-format.md) for a model over a bounded motion space.\n"
             "Several --model images form a focus stack ordered by depth index. Same inputs and seed give\n"
             "byte-identical output.",
@@ -45,8 +45,15 @@ int tables_build(const std::vector<std::string>& argv) {
              {"--seed", "N", "decimation seed (default 1)"},
              {"--binary", "", "binary detector: a non-zero pixel is a feature (model images and frames)"},
              {"--threshold", "N", "gradient detector threshold 1..2040 (default: a quarter of the model's strongest edge)"},
-             {"-o", "OUT", "output table file", false, true}});
+             {"-o", "OUT", "output table file", false, true}},
+            "IMG.pgm");
   if (!args.parse(argv)) return 0;
+  // `--model a.pgm b.pgm c.pgm`: images after the first are positionals.
+  std::vector<std::string> images = args.all("--model");
+  if (!args.positionals().empty() && images.empty()) {
+    throw UsageError("unexpected argument '" + args.positionals()[0] + "' (model images follow --model)");
+  }
+  images.insert(images.end(), args.positionals().begin(), args.positionals().end());
   const bool has_images = args.has("--model");
   if (has_images == args.has("--model-points")) throw UsageError("give either --model or --model-points");
 
@@ -65,7 +72,7 @@ int tables_build(const std::vector<std::string>& argv) {
       mo.ref_x = static_cast<std::int32_t>(ref[0]);
       mo.ref_y = static_cast<std::int32_t>(ref[1]);
     }
-    model = host::model_from_images(args.all("--model"), mo);
+    model = host::model_from_images(images, mo);
   } else {
     if (args.has("--ref")) throw UsageError("--ref applies to --model images; point CSVs are already relative to it");
     model.depths.push_back(host::read_points_csv(args.get("--model-points")));

@@ -7,15 +7,27 @@
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 bash tools/scripts/setup-debian.sh
-status=0
+logs=$(mktemp -d)
+trap 'rm -rf "$logs"' EXIT
+status=0 passed=0 failed=0
 for preset in dev release aarch64 cortex-m7; do
   echo "=== $preset ==="
   start=$SECONDS
-  if cmake --workflow --preset "$preset" --fresh; then
+  if cmake --workflow --preset "$preset" --fresh 2>&1 | tee "$logs/$preset.log"; then
     echo "=== $preset: ok ($((SECONDS - start)) s) ==="
   else
     echo "=== $preset: FAILED ($((SECONDS - start)) s) ==="
     status=1
   fi
+  # ctest's summary: "NN% tests passed, F tests failed out of T"
+  if summary=$(grep -Eo '[0-9]+ tests failed out of [0-9]+' "$logs/$preset.log" | tail -1); then
+    f=$(echo "$summary" | awk '{print $1}'); t=$(echo "$summary" | awk '{print $NF}')
+    passed=$((passed + t - f)); failed=$((failed + f))
+  else
+    failed=$((failed + 1))  # the preset did not get as far as testing
+  fi
 done
+echo "=== all presets ==="
+echo "$passed passed, $failed failed"
+[ "$failed" = 0 ] || status=1
 exit $status
