@@ -1,5 +1,6 @@
 #include "gabarit/tracker.hpp"
 
+#include "gabarit/dense_voter.hpp"
 #include "gabarit/deterministic_math.hpp"
 
 namespace gabarit {
@@ -68,15 +69,20 @@ Status track_step(const TableView& table, const Detector& detector, const ImageV
     window = {cx - half, cy - half, static_cast<std::uint16_t>(side), static_cast<std::uint16_t>(side)};
   }
 
+  GABARIT_TRY(clear_counters(table, scratch.counters));
+  const bool dense = !scratch.dense_masks.empty();
+  const SinCos sc = sin_cos_deg(previous.theta_deg);
+  VoteTally tally;
   FeatureCount found;
   GABARIT_TRY(extract_features(image, window, detector.kind, detector.threshold, scratch.features, found));
-  const SinCos sc = sin_cos_deg(previous.theta_deg);
   std::uint32_t n = found.written;
   if (rotated) n = rotate_into_roi(table, scratch.features, n, window, cx, cy, sc, scratch.roi_mask);
-
-  GABARIT_TRY(clear_counters(table, scratch.counters));
-  VoteTally tally;
-  GABARIT_TRY(accumulate_votes(table, scratch.features.first(n), scratch.counters, tally));
+  const std::span<const RoiPoint> features = scratch.features.first(n);
+  if (dense) {
+    GABARIT_TRY(accumulate_votes_dense(table, scratch.dense_masks, features, scratch.counters, scratch.dense_scratch, tally));
+  } else {
+    GABARIT_TRY(accumulate_votes(table, features, scratch.counters, tally));
+  }
 
   CellScore top[2];
   const std::size_t k = table.cell_count() >= 2 ? 2 : 1;

@@ -37,64 +37,6 @@ void vote_scalar(const TableView& table, std::span<const RoiPoint> features, Vot
   }
 }
 
-// Four references per step. The cells listed by one pixel are distinct (the
-// table view checked they strictly increase), so the four read-modify-writes
-// are independent and can be issued together.
-template <class Ref>
-void vote_unrolled(const TableView& table, std::span<const RoiPoint> features, VoteCounter* counters,
-                   std::uint64_t& votes) noexcept {
-  const std::byte* offsets = table.pixel_offsets_data();
-  const std::byte* refs = table.references_data();
-  const std::uint32_t w = table.roi_width();
-  for (const RoiPoint& f : features) {
-    const std::size_t pixel = std::size_t{f.row} * w + f.col;
-    const std::uint32_t begin = load_le<std::uint32_t>(offsets + pixel * 4);
-    const std::uint32_t end = load_le<std::uint32_t>(offsets + pixel * 4 + 4);
-    const std::byte* r = refs + std::size_t{begin} * sizeof(Ref);
-    std::uint32_t n = end - begin;
-    votes += n;
-    for (; n >= 4; n -= 4, r += 4 * sizeof(Ref)) {
-      const std::uint32_t c0 = load_le<Ref>(r);
-      const std::uint32_t c1 = load_le<Ref>(r + sizeof(Ref));
-      const std::uint32_t c2 = load_le<Ref>(r + 2 * sizeof(Ref));
-      const std::uint32_t c3 = load_le<Ref>(r + 3 * sizeof(Ref));
-      const VoteCounter v0 = counters[c0], v1 = counters[c1], v2 = counters[c2], v3 = counters[c3];
-      counters[c0] = static_cast<VoteCounter>(v0 + (v0 != kVoteCounterMax));
-      counters[c1] = static_cast<VoteCounter>(v1 + (v1 != kVoteCounterMax));
-      counters[c2] = static_cast<VoteCounter>(v2 + (v2 != kVoteCounterMax));
-      counters[c3] = static_cast<VoteCounter>(v3 + (v3 != kVoteCounterMax));
-    }
-    for (; n > 0; --n, r += sizeof(Ref)) bump(counters, load_le<Ref>(r));
-  }
-}
-
-template <template <class> class Loop>
-Status vote_with(const TableView& table, std::span<const RoiPoint> features, std::span<VoteCounter> counters,
-                 VoteTally& tally) noexcept {
-  GABARIT_TRY(check_counters(table, counters));
-  GABARIT_TRY(check_features(table, features));
-  switch (table.reference_bytes()) {
-    case 1: Loop<std::uint8_t>::run(table, features, counters.data(), tally.votes); break;
-    case 2: Loop<std::uint16_t>::run(table, features, counters.data(), tally.votes); break;
-    default: Loop<std::uint32_t>::run(table, features, counters.data(), tally.votes); break;
-  }
-  tally.features += static_cast<std::uint32_t>(features.size());
-  return Status::kOk;
-}
-
-template <class Ref>
-struct ScalarLoop {
-  static void run(const TableView& t, std::span<const RoiPoint> f, VoteCounter* c, std::uint64_t& v) noexcept {
-    vote_scalar<Ref>(t, f, c, v);
-  }
-};
-template <class Ref>
-struct UnrolledLoop {
-  static void run(const TableView& t, std::span<const RoiPoint> f, VoteCounter* c, std::uint64_t& v) noexcept {
-    vote_unrolled<Ref>(t, f, c, v);
-  }
-};
-
 }  // namespace
 
 Status clear_counters(const TableView& table, std::span<VoteCounter> counters) noexcept {
@@ -103,14 +45,17 @@ Status clear_counters(const TableView& table, std::span<VoteCounter> counters) n
   return Status::kOk;
 }
 
-Status accumulate_votes_reference(const TableView& table, std::span<const RoiPoint> features,
-                                  std::span<VoteCounter> counters, VoteTally& tally) noexcept {
-  return vote_with<ScalarLoop>(table, features, counters, tally);
-}
-
 Status accumulate_votes(const TableView& table, std::span<const RoiPoint> features,
                         std::span<VoteCounter> counters, VoteTally& tally) noexcept {
-  return vote_with<UnrolledLoop>(table, features, counters, tally);
+  GABARIT_TRY(check_counters(table, counters));
+  GABARIT_TRY(check_features(table, features));
+  switch (table.reference_bytes()) {
+    case 1: vote_scalar<std::uint8_t>(table, features, counters.data(), tally.votes); break;
+    case 2: vote_scalar<std::uint16_t>(table, features, counters.data(), tally.votes); break;
+    default: vote_scalar<std::uint32_t>(table, features, counters.data(), tally.votes); break;
+  }
+  tally.features += static_cast<std::uint32_t>(features.size());
+  return Status::kOk;
 }
 
 Status select_top_cells(const TableView& table, std::span<const VoteCounter> counters,

@@ -11,6 +11,7 @@
 #include <new>
 #include <vector>
 
+#include "gabarit/dense_voter.hpp"
 #include "gabarit/features.hpp"
 #include "gabarit/host/image_io.hpp"
 #include "gabarit/tracker.hpp"
@@ -92,7 +93,11 @@ int main() {
   std::vector<VoteCounter> counters(voter_counter_count(table.cell_count()));
   std::vector<std::uint8_t> mask(tracker_mask_bytes(table));
   std::vector<CellScore> top(5);
+  std::vector<std::uint64_t> masks(dense_mask_words(table.roi_pixels(), table.cell_count()));
+  std::vector<std::uint64_t> dense_scratch(dense_scratch_words(table.cell_count()));
+  if (build_dense_masks(table, masks) != Status::kOk) return 2;
   const TrackerScratch scratch{features, counters, mask};
+  const TrackerScratch dense{features, counters, mask, masks, dense_scratch};
   const ImageView view = frame.view();
   const ImageWindow window{0, 0, 64, 64};
 
@@ -120,7 +125,8 @@ int main() {
     VoteTally tally;
     return clear_counters(table, counters) == Status::kOk &&
            accumulate_votes(table, std::span(features).first(c.written), counters, tally) == Status::kOk &&
-           accumulate_votes_reference(table, std::span(features).first(c.written), counters, tally) == Status::kOk &&
+           accumulate_votes_dense(table, masks, std::span(features).first(c.written), counters, dense_scratch, tally) == Status::kOk &&
+           build_dense_masks(table, masks) == Status::kOk &&
            select_top_cells(table, counters, top) == Status::kOk;
   });
   expect_no_allocation("track_step", [&] { StepResult r; return track_step(table, view, Pose{32, 32, 0, 0}, scratch, r) == Status::kOk; });
@@ -128,6 +134,11 @@ int main() {
     StepResult r;
     return track_step(table, view, Pose{32, 32, 3.5f, 0}, scratch, r) == Status::kOk;
   });
-  std::printf("%d passed, %d failed\n", 6 - failures, failures);
+  expect_no_allocation("track_step, dense voter", [&] { StepResult r; return track_step(table, view, Pose{32, 32, 0, 0}, dense, r) == Status::kOk; });
+  expect_no_allocation("track_step, dense voter, rotated", [&] {
+    StepResult r;
+    return track_step(table, view, Pose{32, 32, -2.0f, 0}, dense, r) == Status::kOk;
+  });
+  std::printf("%d passed, %d failed\n", 8 - failures, failures);
   return failures == 0 ? 0 : 1;
 }

@@ -21,45 +21,6 @@ std::vector<RoiPoint> random_features(host::Rng& rng, const TableView& t, double
   return f;
 }
 
-// Awkward tables: 1-, 2- and 4-byte references, pixel lists of every length
-// mod 4, features counts from 0 up.
-struct Case {
-  const char* name;
-  std::size_t points;
-  const char* x;
-  const char* y;
-  const char* theta;
-  std::uint8_t ref_bytes;
-};
-
-TEST(Voter, UnrolledMatchesTheScalarReferenceBitForBit) {
-  const Case cases[] = {
-      {"1-byte refs", 25, "-4:4:9", "-3:3:7", "0:0:1", 1},
-      {"1-byte refs, rotation", 9, "-1:1:3", "-1:1:3", "-6:6:5", 1},
-      {"2-byte refs", 7, "-15:15:31", "-9:9:19", "0:0:1", 2},
-      {"4-byte refs", 1, "0:256:257", "0:255:256", "0:0:1", 4},
-  };
-  for (const Case& c : cases) {
-    host::Rng rng(77);
-    const auto bytes = build(point_model(testing::random_points(rng, c.points, 10)), c.x, c.y, c.theta);
-    const TableView t = testing::open_table(bytes);
-    ASSERT_EQ(t.reference_bytes(), c.ref_bytes) << c.name;
-    for (double density : {0.0, 0.001, 0.05, 0.3, 1.0}) {
-      auto features = random_features(rng, t, density);
-      for (std::size_t n : {features.size(), features.size() / 3, std::size_t{1}, std::size_t{3}}) {
-        const std::span<const RoiPoint> f = std::span(features).first(std::min(n, features.size()));
-        std::vector<VoteCounter> a(t.cell_count(), 7), b(t.cell_count(), 7);  // non-zero start: accumulate
-        VoteTally ta, tb;
-        ASSERT_EQ(accumulate_votes_reference(t, f, a, ta), Status::kOk);
-        ASSERT_EQ(accumulate_votes(t, f, b, tb), Status::kOk);
-        ASSERT_EQ(a, b) << c.name << " density " << density << " n " << n;
-        EXPECT_EQ(ta.votes, tb.votes);
-        EXPECT_EQ(ta.features, f.size());
-      }
-    }
-  }
-}
-
 TEST(Voter, CountsEachFeatureOncePerCellItsPixelLists) {
   host::Rng rng(5);
   const auto bytes = build(point_model(testing::random_points(rng, 30, 12)), "-3:3:7", "-3:3:7");
@@ -130,13 +91,11 @@ TEST(Voter, CountersSaturateInsteadOfWrapping) {
   const auto bytes = build(point_model({{0, 0}, {1, 0}}), "0:1:2", "0:0:1");
   const TableView t = testing::open_table(bytes);
   const std::vector<RoiPoint> same(70000, RoiPoint{1, 0});  // one pixel listed many times
-  for (auto vote : {&accumulate_votes_reference, &accumulate_votes}) {
-    std::vector<VoteCounter> counters(t.cell_count(), 0);
-    VoteTally tally;
-    ASSERT_EQ(vote(t, same, counters, tally), Status::kOk);
-    for (VoteCounter c : counters) EXPECT_TRUE(c == 0 || c == kVoteCounterMax);
-    EXPECT_EQ(*std::max_element(counters.begin(), counters.end()), kVoteCounterMax);
-  }
+  std::vector<VoteCounter> counters(t.cell_count(), 0);
+  VoteTally tally;
+  ASSERT_EQ(accumulate_votes(t, same, counters, tally), Status::kOk);
+  for (VoteCounter c : counters) EXPECT_TRUE(c == 0 || c == kVoteCounterMax);
+  EXPECT_EQ(*std::max_element(counters.begin(), counters.end()), kVoteCounterMax);
 }
 
 TEST(Voter, RejectsFeaturesOutsideTheRoiWithoutTouchingCounters) {
@@ -146,7 +105,6 @@ TEST(Voter, RejectsFeaturesOutsideTheRoiWithoutTouchingCounters) {
   VoteTally tally;
   const std::vector<RoiPoint> f = {{0, 0}, {t.roi_width(), 0}};
   EXPECT_EQ(accumulate_votes(t, f, counters, tally), Status::kFeatureOutOfRoi);
-  EXPECT_EQ(accumulate_votes_reference(t, f, counters, tally), Status::kFeatureOutOfRoi);
   EXPECT_EQ(std::count(counters.begin(), counters.end(), 3), static_cast<long>(t.cell_count()));
   EXPECT_EQ(tally.votes, 0u);
 }

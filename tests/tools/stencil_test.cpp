@@ -71,7 +71,7 @@ TEST(Stencil, TableVotesEqualBruteForceIntersectionCounts) {
         }
     std::vector<VoteCounter> counters(t.cell_count(), 0);
     VoteTally tally;
-    ASSERT_EQ(accumulate_votes_reference(t, features, counters, tally), Status::kOk);
+    ASSERT_EQ(accumulate_votes(t, features, counters, tally), Status::kOk);
 
     for (std::uint32_t cell = 0; cell < t.cell_count(); ++cell) {
       const CellBounds b = t.cell(cell);

@@ -23,6 +23,7 @@ int track(const std::vector<std::string>& argv) {
              {"--frames", "SEQ", "Y4M file or directory of .pgm frames", false, true},
              {"--init", "X,Y[,THETA[,DEPTH]]", "pose before the first frame (image position of the reference point)", false, true},
              {"--binary", "", "use the binary detector on frames whatever the table says"},
+             {"--voter", "auto|csr|dense", "voting method (default auto: dense when the table has <= 1024 cells); same results"},
              {"-o", "POSES.csv", "pose output (default stdout)"},
              {"--stats", "STATS.json", "per-frame timing and vote statistics"}});
   if (!args.parse(argv)) return 0;
@@ -41,6 +42,14 @@ int track(const std::vector<std::string>& argv) {
       throw UsageError("--init: DEPTH must be an integer in 0.." + std::to_string(table.depth_count() - 1));
     }
     pose.depth = static_cast<std::uint16_t>(init[3]);
+  }
+  host::VoterChoice voter = host::VoterChoice::kAuto;
+  if (const std::string v = args.get_or("--voter", "auto"); v == "csr") {
+    voter = host::VoterChoice::kCsr;
+  } else if (v == "dense") {
+    voter = host::VoterChoice::kDense;
+  } else if (v != "auto") {
+    throw UsageError("--voter '" + v + "': want auto, csr or dense");
   }
   std::optional<Detector> detector;
   if (args.has("--binary")) detector = Detector{table_format::DetectorKind::kBinary, 0};
@@ -66,7 +75,7 @@ int track(const std::vector<std::string>& argv) {
     dropped += row.step.features_dropped;
     lost += row.step.state == TrackState::kLost;
     uncertain += row.step.state == TrackState::kUncertain;
-  });
+  }, voter);
   out->flush();
   if (!*out) throw host::Error("pose output: write failed");
   const host::TimingSummary t = host::summarise_timing(micros);

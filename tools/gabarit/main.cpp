@@ -1,8 +1,12 @@
 // gabarit — the host CLI: table building and inspection, synthetic sequences,
 // tracking and evaluation. Errors go to stderr with a non-zero exit code
 // (2 for bad usage, 1 for everything else).
+#include <unistd.h>
+
+#include <cerrno>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <exception>
 #include <string>
 #include <vector>
@@ -19,7 +23,21 @@ constexpr const char* kUsage =
     "  tables inspect   validate a table and print it as JSON\n"
     "  synth            write a synthetic sequence with ground truth\n"
     "  track            track a model through a sequence\n"
-    "  eval             compare tracked poses with ground truth\n";
+    "  eval             compare tracked poses with ground truth\n"
+    "  bench            re-measure the thesis's synthetic experiments (runs gabarit-bench)\n";
+
+// `gabarit bench` runs gabarit-bench from this executable's directory: the
+// benchmark links OpenCV (the peer it measures against), this binary never does.
+int exec_bench(char** argv) {
+  std::error_code ec;
+  const auto self = std::filesystem::read_symlink("/proc/self/exe", ec);
+  const std::string bench = (ec ? std::filesystem::path(".") : self.parent_path()) / "gabarit-bench";
+  argv[1] = const_cast<char*>(bench.c_str());
+  ::execv(bench.c_str(), argv + 1);
+  std::fprintf(stderr, "gabarit bench: cannot run %s: %s (built only when libopencv-imgproc-dev is installed)\n", bench.c_str(),
+               std::strerror(errno));
+  return 1;
+}
 
 }  // namespace
 
@@ -33,6 +51,7 @@ int main(int argc, char** argv) {
     }
     command = args[0];
     args.erase(args.begin());
+    if (command == "bench") return exec_bench(argv);
     if (command == "tables") {
       if (args.empty()) throw gabarit::cli::UsageError("tables: want 'build' or 'inspect'");
       const std::string sub = args[0];

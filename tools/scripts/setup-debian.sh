@@ -7,6 +7,8 @@ packages=(
   googletest libgtest-dev
   g++-aarch64-linux-gnu qemu-user
   gcc-arm-none-eabi libnewlib-arm-none-eabi libstdc++-arm-none-eabi-newlib
+  libopencv-imgproc-dev   # gabarit bench's peer (matchTemplate); never linked into the tracker
+  python3-skimage netpbm  # the real photograph behind the 'watch' shape, converted at run time
 )
 missing=()
 for p in "${packages[@]}"; do

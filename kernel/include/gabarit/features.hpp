@@ -1,6 +1,7 @@
 // Feature extraction into caller buffers. Features are written in window
 // coordinates (column, row inside the ImageWindow), in raster order, at most
-// out.size() of them; the rest are counted as dropped, never written.
+// out.size() of them; the rest are counted as dropped, never written. Slots
+// of `out` past the features written may be used as scratch.
 //
 // Detectors:
 //  - binary: a pixel is a feature when it is non-zero;

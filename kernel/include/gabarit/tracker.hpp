@@ -76,7 +76,13 @@ inline std::size_t tracker_mask_bytes(const TableView& t) noexcept {
 struct TrackerScratch {
   std::span<RoiPoint> features;      // >= tracker_feature_capacity(table) avoids dropped features
   std::span<VoteCounter> counters;   // == voter_counter_count(table.cell_count())
-  std::span<std::uint8_t> roi_mask;  // >= tracker_mask_bytes(table)
+  std::span<std::uint8_t> roi_mask;  // >= tracker_mask_bytes(table); only used when theta != 0
+  // Optional word-parallel voting (dense_voter.hpp), for tables of at most
+  // kDenseMaxCells cells: masks prepared once by build_dense_masks, and
+  // dense_scratch_words(cells) words. Empty: the CSR voter. Results are
+  // bit-identical either way.
+  std::span<const std::uint64_t> dense_masks = {};
+  std::span<std::uint64_t> dense_scratch = {};
 };
 
 struct StepResult {

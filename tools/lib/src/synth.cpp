@@ -49,6 +49,17 @@ std::vector<Point> random_closed_curve(std::size_t target_points, std::uint64_t 
   return curve;
 }
 
+void fit_image_to_shape(SynthOptions& o) {
+  std::int32_t extent_x = 0, extent_y = 0;
+  for (const Point& p : o.shape) {
+    extent_x = std::max(extent_x, std::abs(p.x));
+    extent_y = std::max(extent_y, std::abs(p.y));
+  }
+  const std::int32_t room = std::max(16, 4 * o.max_step);
+  o.width = std::max<std::uint32_t>(256, static_cast<std::uint32_t>(2 * (extent_x + room) + 1));
+  o.height = std::max<std::uint32_t>(256, static_cast<std::uint32_t>(2 * (extent_y + room) + 1));
+}
+
 GrayImage render_frame(const SynthOptions& o, std::int32_t x, std::int32_t y, std::uint64_t frame_seed) {
   GrayImage image(o.width, o.height, 0);
   for (const Point& p : o.shape) {

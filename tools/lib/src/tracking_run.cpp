@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cstdio>
 
+#include "gabarit/dense_voter.hpp"
 #include "gabarit/host/error.hpp"
 
 namespace gabarit::host {
@@ -27,12 +28,28 @@ TimingSummary summarise_timing(std::vector<double> micros) {
   return s;
 }
 
+TrackerBuffers::TrackerBuffers(const TableView& table, VoterChoice voter)
+    : features_(tracker_feature_capacity(table)),
+      counters_(voter_counter_count(table.cell_count())),
+      mask_(tracker_mask_bytes(table)) {
+  const bool fits = table.cell_count() <= kDenseMaxCells;
+  if (voter == VoterChoice::kDense && !fits) {
+    throw Error("the dense voter takes at most " + std::to_string(kDenseMaxCells) + " cells; this table has " +
+                std::to_string(table.cell_count()));
+  }
+  if (voter != VoterChoice::kCsr && fits) {
+    masks_.resize(dense_mask_words(table.roi_pixels(), table.cell_count()));
+    dense_scratch_.resize(dense_scratch_words(table.cell_count()));
+    if (build_dense_masks(table, masks_) != Status::kOk) throw Error("internal error: building dense masks failed");
+  }
+}
+
+TrackerScratch TrackerBuffers::scratch() { return {features_, counters_, mask_, masks_, dense_scratch_}; }
+
 void run_tracking(const TableView& table, FrameSource& frames, const Pose& init, const std::optional<Detector>& detector,
-                  const std::function<void(const TrackRow&)>& on_row) {
-  std::vector<RoiPoint> features(tracker_feature_capacity(table));
-  std::vector<VoteCounter> counters(voter_counter_count(table.cell_count()));
-  std::vector<std::uint8_t> mask(tracker_mask_bytes(table));
-  const TrackerScratch scratch{features, counters, mask};
+                  const std::function<void(const TrackRow&)>& on_row, VoterChoice voter) {
+  TrackerBuffers buffers(table, voter);
+  const TrackerScratch scratch = buffers.scratch();
   const Detector use = detector ? *detector : detector_of(table);
 
   GrayImage frame;

@@ -33,6 +33,9 @@ struct TruthRow {
   std::int32_t x, y;
 };
 
+// Grows width/height (from at least 256x256) so the shape fits with room to move.
+void fit_image_to_shape(SynthOptions& options);
+
 // Writes DIR/frames.y4m, DIR/gt.csv, DIR/model.csv and DIR/model.pgm (the
 // shape drawn with its reference point at the image centre floor(w/2),
 // floor(h/2), so `tables build --model model.pgm --binary` agrees with

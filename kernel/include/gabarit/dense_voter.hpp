@@ -1,0 +1,49 @@
+// Word-parallel voting for tables with few cells (the thesis's spaces have
+// 121): every ROI pixel's cell list is expanded once into a bitmask of
+// dense_words_per_pixel(cells) 64-bit words, and a frame's votes accumulate in
+// bit-sliced counters — bit plane b holds bit b of every cell's count — fed
+// through carry-save adders, eight masks at a time (Harley-Seal). There is no
+// branch per feature and no read-modify-write per reference.
+//
+// Results are bit-identical to accumulate_votes (the CSR voter), including
+// saturation: features are taken in blocks of at most 65535, whose counts
+// cannot overflow 16 planes, and each block is added to the counters with
+// saturation.
+//
+// Memory (caller-owned):
+//   masks:   dense_mask_words(roi_pixels, cells) words, filled by build_dense_masks
+//   scratch: dense_scratch_words(cells) words
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <span>
+
+#include "gabarit/roi_point.hpp"
+#include "gabarit/status.hpp"
+#include "gabarit/table_view.hpp"
+#include "gabarit/voter.hpp"
+
+namespace gabarit {
+
+// Beyond this many cells the masks grow past the lists they replace and the
+// CSR voter is the better choice.
+inline constexpr std::uint32_t kDenseMaxCells = 1024;
+
+constexpr std::size_t dense_words_per_pixel(std::uint32_t cells) noexcept { return (std::size_t{cells} + 63) / 64; }
+constexpr std::size_t dense_mask_words(std::uint32_t roi_pixels, std::uint32_t cells) noexcept {
+  return std::size_t{roi_pixels} * dense_words_per_pixel(cells);
+}
+// 16 count planes plus the carry-save adders' ones, twos and fours.
+constexpr std::size_t dense_scratch_words(std::uint32_t cells) noexcept { return 19 * dense_words_per_pixel(cells); }
+
+// Expands the table's lists into masks. kInvalidArgument when the table has
+// more than kDenseMaxCells cells, kBufferTooSmall for a short buffer.
+Status build_dense_masks(const TableView& table, std::span<std::uint64_t> masks) noexcept;
+
+// Adds the votes of `features` to `counters` (one per cell), like accumulate_votes.
+Status accumulate_votes_dense(const TableView& table, std::span<const std::uint64_t> masks,
+                              std::span<const RoiPoint> features, std::span<VoteCounter> counters,
+                              std::span<std::uint64_t> scratch, VoteTally& tally) noexcept;
+
+}  // namespace gabarit

@@ -1,0 +1,144 @@
+#include "gabarit/dense_voter.hpp"
+
+namespace gabarit {
+namespace {
+
+constexpr std::size_t kPlanes = 16;
+constexpr std::uint32_t kBlock = 65535;  // features per block: counts fit 16 planes
+
+// Carry-save adder: (high, low) = a + b + c, bitwise.
+inline void csa(std::uint64_t& high, std::uint64_t& low, std::uint64_t a, std::uint64_t b, std::uint64_t c) noexcept {
+  const std::uint64_t u = a ^ b;
+  high = (a & b) | (u & c);
+  low = u ^ c;
+}
+
+// Bit-sliced counters for W words of cells. Layout of scratch:
+// planes[kPlanes][W], ones[W], twos[W], fours[W].
+class SlicedCounters {
+ public:
+  SlicedCounters(std::span<std::uint64_t> scratch, std::size_t words) noexcept
+      : planes_(scratch.data()), ones_(planes_ + kPlanes * words), twos_(ones_ + words), fours_(twos_ + words), words_(words) {
+    for (std::size_t i = 0; i < 19 * words; ++i) scratch[i] = 0;
+  }
+
+  // Adds eight masks (each `words_` words).
+  void add8(const std::uint64_t* const m[8]) noexcept {
+    for (std::size_t w = 0; w < words_; ++w) {
+      std::uint64_t twos_a, twos_b, fours_a, fours_b, eights;
+      csa(twos_a, ones_[w], ones_[w], m[0][w], m[1][w]);
+      csa(twos_b, ones_[w], ones_[w], m[2][w], m[3][w]);
+      csa(fours_a, twos_[w], twos_[w], twos_a, twos_b);
+      csa(twos_a, ones_[w], ones_[w], m[4][w], m[5][w]);
+      csa(twos_b, ones_[w], ones_[w], m[6][w], m[7][w]);
+      csa(fours_b, twos_[w], twos_[w], twos_a, twos_b);
+      csa(eights, fours_[w], fours_[w], fours_a, fours_b);
+      ripple(w, eights, 3);
+    }
+  }
+
+  void add1(const std::uint64_t* m) noexcept {
+    for (std::size_t w = 0; w < words_; ++w) ripple(w, m[w], 0);
+  }
+
+  // Adds the block's counts to `counters` with saturation, clears the block
+  // and returns the block's total count (references read).
+  std::uint64_t flush(std::span<VoteCounter> counters) noexcept {
+    for (std::size_t w = 0; w < words_; ++w) {
+      ripple(w, ones_[w], 0);
+      ripple(w, twos_[w], 1);
+      ripple(w, fours_[w], 2);
+      ones_[w] = twos_[w] = fours_[w] = 0;
+    }
+    // Counts are usually far below 2^16: decode only the planes in use.
+    std::size_t used = 0;
+    for (std::size_t b = 0; b < kPlanes; ++b)
+      for (std::size_t w = 0; w < words_; ++w)
+        if (planes_[b * words_ + w] != 0) used = b + 1;
+    std::uint64_t total = 0;
+    for (std::size_t cell = 0; cell < counters.size(); ++cell) {
+      const std::size_t w = cell / 64, bit = cell % 64;
+      std::uint32_t value = 0;
+      for (std::size_t b = 0; b < used; ++b) value |= static_cast<std::uint32_t>((planes_[b * words_ + w] >> bit) & 1u) << b;
+      total += value;
+      const std::uint32_t sum = counters[cell] + value;
+      counters[cell] = static_cast<VoteCounter>(sum > kVoteCounterMax ? kVoteCounterMax : sum);
+    }
+    for (std::size_t i = 0; i < kPlanes * words_; ++i) planes_[i] = 0;
+    return total;
+  }
+
+ private:
+  // Adds `carry` (one bit per cell) with weight 2^from to the count planes.
+  void ripple(std::size_t w, std::uint64_t carry, std::size_t from) noexcept {
+    for (std::size_t b = from; carry != 0 && b < kPlanes; ++b) {
+      std::uint64_t& plane = planes_[b * words_ + w];
+      const std::uint64_t next = plane & carry;
+      plane ^= carry;
+      carry = next;
+    }
+  }
+
+  std::uint64_t* planes_;
+  std::uint64_t* ones_;
+  std::uint64_t* twos_;
+  std::uint64_t* fours_;
+  std::size_t words_;
+};
+
+Status check(const TableView& table, std::span<const std::uint64_t> masks, std::span<VoteCounter> counters,
+             std::span<std::uint64_t> scratch) noexcept {
+  if (table.cell_count() == 0 || table.cell_count() > kDenseMaxCells) return Status::kInvalidArgument;
+  if (masks.size() != dense_mask_words(table.roi_pixels(), table.cell_count()) ||
+      counters.size() != voter_counter_count(table.cell_count()) ||
+      scratch.size() < dense_scratch_words(table.cell_count())) {
+    return Status::kBufferTooSmall;
+  }
+  return Status::kOk;
+}
+
+}  // namespace
+
+Status build_dense_masks(const TableView& table, std::span<std::uint64_t> masks) noexcept {
+  if (table.cell_count() == 0 || table.cell_count() > kDenseMaxCells) return Status::kInvalidArgument;
+  const std::size_t words = dense_words_per_pixel(table.cell_count());
+  if (masks.size() != dense_mask_words(table.roi_pixels(), table.cell_count())) return Status::kBufferTooSmall;
+  for (std::uint64_t& m : masks) m = 0;
+  for (std::uint32_t p = 0; p < table.roi_pixels(); ++p) {
+    for (std::uint32_t i = table.references_begin(p); i < table.references_begin(p + 1); ++i) {
+      const std::uint32_t cell = table.reference(i);
+      masks[p * words + cell / 64] |= std::uint64_t{1} << (cell % 64);
+    }
+  }
+  return Status::kOk;
+}
+
+Status accumulate_votes_dense(const TableView& table, std::span<const std::uint64_t> masks,
+                              std::span<const RoiPoint> features, std::span<VoteCounter> counters,
+                              std::span<std::uint64_t> scratch, VoteTally& tally) noexcept {
+  GABARIT_TRY(check(table, masks, counters, scratch));
+  const std::uint16_t w = table.roi_width(), h = table.roi_height();
+  for (const RoiPoint& f : features) {
+    if (f.col >= w || f.row >= h) return Status::kFeatureOutOfRoi;
+  }
+  const std::size_t words = dense_words_per_pixel(table.cell_count());
+  const auto mask_of = [&](const RoiPoint& f) { return masks.data() + (std::size_t{f.row} * w + f.col) * words; };
+  SlicedCounters sliced(scratch, words);
+  std::uint64_t votes = 0;
+  for (std::size_t start = 0; start < features.size(); start += kBlock) {
+    const std::size_t end = start + kBlock < features.size() ? start + kBlock : features.size();
+    std::size_t i = start;
+    for (; i + 8 <= end; i += 8) {
+      const std::uint64_t* m[8];
+      for (int k = 0; k < 8; ++k) m[k] = mask_of(features[i + static_cast<std::size_t>(k)]);
+      sliced.add8(m);
+    }
+    for (; i < end; ++i) sliced.add1(mask_of(features[i]));
+    votes += sliced.flush(counters);
+  }
+  tally.features += static_cast<std::uint32_t>(features.size());
+  tally.votes += votes;
+  return Status::kOk;
+}
+
+}  // namespace gabarit

@@ -1,0 +1,104 @@
+// The thesis's synthetic experiments (section 6.2), re-measured: the trial
+// generator, the estimators of Table 6.1, the wrong-frame grid of Figs.
+// 6.16-6.19, and the stencil statistics of Figs. 6.20/6.26/6.27. No OpenCV
+// here: the OpenCV peer lives in bench_main.cpp only.
+//
+// Protocol ("one-step"): every trial is independent. The object sits at a
+// known previous position, moves by a random integer step within +-4 px per
+// axis, the frame gets salt-and-pepper noise, and an estimator is asked for
+// the new position from the previous one. A trial is wrong when the estimate
+// is not the true pixel. Tracking errors therefore never cascade, and each
+// grid point counts independent failures.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "gabarit/host/image_io.hpp"
+#include "gabarit/host/model.hpp"
+#include "gabarit/host/synth.hpp"
+#include "gabarit/host/tracking_run.hpp"
+#include "gabarit/table_view.hpp"
+#include "gabarit/tracker.hpp"
+
+namespace gabarit::bench {
+
+using host::GrayImage;
+using host::Point;
+
+inline constexpr std::int32_t kMaxStep = 4;    // motion per axis and frame
+inline constexpr const char* kCellAxis = "-5:5:11";  // 1-pixel cells over +-5 px
+
+struct Shape {
+  std::string name;
+  std::vector<Point> points;
+  std::uint32_t width = 0, height = 0;  // frame size
+};
+Shape make_shape(const std::string& name, std::vector<Point> points);
+
+struct Trial {
+  GrayImage frame;
+  Point previous;
+  Point truth;
+};
+// `count` trials at noise rate `noise`, deterministic in `seed`.
+std::vector<Trial> make_trials(const Shape& shape, double noise, std::size_t count, std::uint64_t seed);
+
+// A table for the shape (binary detector, 1-pixel cells over +-5 px).
+std::vector<std::byte> shape_table(const Shape& shape, double keep, std::uint64_t seed);
+
+class Estimator {
+ public:
+  virtual ~Estimator() = default;
+  virtual std::string name() const = 0;
+  virtual Point estimate(const Trial& trial) = 0;
+};
+
+// (a) cross-correlation with the rectangular template (the model's bounding
+//     box) at every translation of the window;
+std::unique_ptr<Estimator> rect_xcorr(const Shape& shape);
+// (b) cross-correlation with the shape template (model points only);
+std::unique_ptr<Estimator> shape_xcorr(const Shape& shape);
+// (c) the exhaustive stencil estimator (thesis Algorithm 3): every cell
+//     counts the feature pixels of its stencil, reading the frame directly;
+std::unique_ptr<Estimator> exhaustive_stencil(const std::vector<std::byte>& table, std::size_t frame_stride);
+// (d), (e) the bounded Hough transform (the kernel's track_step) with the
+//     given table (full or decimated stencils) and voter.
+std::unique_ptr<Estimator> hough(std::vector<std::byte> table, const std::string& name,
+                                 host::VoterChoice voter = host::VoterChoice::kAuto);
+
+struct GridRow {
+  std::string shape;
+  double noise = 0;
+  double keep = 1;
+  std::size_t frames = 0;
+  std::size_t wrong = 0;
+};
+struct GridSpec {
+  std::vector<double> noises;
+  std::vector<double> keeps;
+  std::size_t frames = 100;
+  std::uint64_t seed = 1;
+  unsigned threads = 1;
+  std::function<void(std::size_t done, std::size_t total)> progress;
+};
+// Wrong frames of the Hough tracker for every shape x noise x keep. Jobs run
+// on `threads` threads; results do not depend on the thread count.
+std::vector<GridRow> run_grid(const std::vector<Shape>& shapes, const GridSpec& spec);
+
+// The small grid the regression test and its baseline use.
+GridSpec regression_grid_spec();
+
+struct Robustness {
+  double mean = 0;  // over stencils of |S_U| - max_{V != U} |S_U ∩ S_V|
+  std::int64_t min = 0;
+};
+Robustness stencil_robustness(const TableView& table);
+
+// refs-per-pixel histogram: result[n] = ROI pixels listing n cells.
+std::vector<std::uint64_t> refs_per_pixel(const TableView& table);
+
+}  // namespace gabarit::bench
