@@ -7,6 +7,7 @@
 
 #include "args.hpp"
 #include "commands.hpp"
+#include "gabarit/host/hdl_export.hpp"
 #include "gabarit/host/mapped_file.hpp"
 #include "gabarit/host/model.hpp"
 #include "gabarit/host/table_builder.hpp"
@@ -124,6 +125,31 @@ int tables_inspect(const std::vector<std::string>& argv) {
     throw host::Error(path + ": not a valid table: " + status_name(s));
   }
   std::cout << host::inspect_json(view);
+  return 0;
+}
+
+}  // namespace gabarit::cli
+
+namespace gabarit::cli {
+
+int tables_export_hdl(const std::vector<std::string>& argv) {
+  Args args("tables export-hdl", "TABLE --out DIR [--lanes N]",
+            "Writes the hardware voter's memory images ($readmemh: offsets.mem, refs_<k>.mem, sizes_<k>.mem) and\n"
+            "a SystemVerilog package with the table's sizes (gabarit_table_pkg.sv) for hdl/rtl/gbt_voter_table.sv.",
+            {{"--out", "DIR", "output directory", false, true},
+             {"--lanes", "N", "voting lanes: 1, 2, 4 or 8 (default 1)"}},
+            "TABLE");
+  if (!args.parse(argv)) return 0;
+  if (args.positionals().size() != 1) throw UsageError("give exactly one TABLE");
+  const auto lanes = static_cast<std::uint32_t>(args.integer("--lanes", 1, 1, 8));
+  if (lanes != 1 && lanes != 2 && lanes != 4 && lanes != 8) throw UsageError("--lanes must be 1, 2, 4 or 8");
+  const std::string& path = args.positionals()[0];
+  host::MappedFile file(path);
+  TableView view;
+  if (const Status s = TableView::open(file.bytes(), view); s != Status::kOk) {
+    throw host::Error(path + ": not a valid table: " + status_name(s));
+  }
+  std::fprintf(stderr, "%s\n", host::write_hdl_export(host::hdl_layout(view, lanes), args.get("--out")).c_str());
   return 0;
 }
 

@@ -1,0 +1,65 @@
+// gbt_fifo — small synchronous FIFO (registers), first-word fall-through.
+//
+// push_i with !full_o stores wdata_i; rdata_o shows the head whenever
+// !empty_o, and pop_i removes it. A push and a pop may happen in one cycle.
+// free_o counts the free slots (the voter's intake uses it for slack).
+`default_nettype none
+
+module gbt_fifo #(
+  parameter int unsigned Depth = 8,       // a power of two
+  parameter int unsigned WidthBits = 32,
+  localparam int unsigned PtrWidth = $clog2(Depth)
+) (
+  input  logic                 clk_i,
+  input  logic                 rst_ni,
+  input  logic                 clear_i,
+  input  logic                 push_i,
+  input  logic [WidthBits-1:0] wdata_i,
+  input  logic                 pop_i,
+  output logic [WidthBits-1:0] rdata_o,
+  output logic                 empty_o,
+  output logic                 full_o,
+  output logic [PtrWidth:0]    free_o
+);
+
+  logic [WidthBits-1:0] mem_q [Depth];
+  logic [PtrWidth-1:0]  rd_q, wr_q;
+  logic [PtrWidth:0]    used_q;
+
+  assign empty_o = (used_q == '0);
+  assign full_o  = (used_q == (PtrWidth + 1)'(Depth));
+  assign free_o  = (PtrWidth + 1)'(Depth) - used_q;
+  assign rdata_o = mem_q[rd_q];
+
+  wire do_push = push_i && !full_o;
+  wire do_pop  = pop_i && !empty_o;
+
+  always_ff @(posedge clk_i or negedge rst_ni) begin
+    if (!rst_ni) begin
+      rd_q <= '0;
+      wr_q <= '0;
+      used_q <= '0;
+    end else if (clear_i) begin
+      rd_q <= '0;
+      wr_q <= '0;
+      used_q <= '0;
+    end else begin
+      if (do_push) wr_q <= wr_q + 1'b1;
+      if (do_pop) rd_q <= rd_q + 1'b1;
+      used_q <= used_q + (PtrWidth + 1)'(do_push) - (PtrWidth + 1)'(do_pop);
+    end
+  end
+
+  always_ff @(posedge clk_i) begin
+    if (do_push) mem_q[wr_q] <= wdata_i;
+  end
+
+`ifdef FORMAL
+  always_ff @(posedge clk_i) begin
+    if (rst_ni) assert (used_q <= (PtrWidth + 1)'(Depth));
+  end
+`endif
+
+endmodule
+
+`default_nettype wire

@@ -1,0 +1,319 @@
+// gbt_voter — the gabarit hardware voter: a stream of feature pixels in, the
+// kernel's counters, best cell and runner-up out, bit for bit
+// (kernel/src/voter.cpp is the golden model; tests/hdl co-simulates both).
+//
+// Data layout (memory images from `gabarit tables export-hdl`):
+//   offsets  roi_width*roi_height words; word p holds, for each lane k at bits
+//            [k*RangeWidth +: RangeWidth], {begin, count} of pixel p's
+//            references that fall in lane k's bank (cells c % Lanes == k)
+//   refs_k   lane k's references, as local cell indices c / Lanes
+//   sizes_k  stencil sizes of lane k's cells, clamped to >= 1
+//
+// Handshake and timing:
+//   frame_start_i (pulse, while idle or done): counters cleared in
+//     CellsPerLane clocks (busy_o high, feat_ready_o low), then the frame runs.
+//   feat_valid_i/feat_ready_o/feat_col_i/feat_row_i: one feature per clock at
+//     most; a feature is taken when valid && ready. Features outside the ROI
+//     are dropped and raise roi_error_o; features beyond MaxFeaturesPerFrame
+//     are dropped and raise overflow_o (the handshake never stalls on them).
+//   intake: clock t takes a feature and reads its offsets word; clock t+1
+//     pushes each lane's non-empty range into that lane's FIFO. Ready needs two
+//     free FIFO slots in every lane (the push in flight plus this one).
+//   frame_end_i (pulse, any time after frame_start_i, even while clearing —
+//     it is latched): the pipelines drain, the lanes' top-2
+//     lists merge over 2*Lanes clocks, then result_valid_o stays high with
+//     best/runner/votes/features/cycles until the next frame_start_i.
+//   Steady state: each lane retires one vote per clock; with the references
+//     of a pixel spread over the banks, Lanes votes per clock.
+`default_nettype none
+
+module gbt_voter import gbt_pkg::*; #(
+  parameter int unsigned Lanes = 1,                 // 1, 2, 4 or 8
+  parameter int unsigned CellCapacity = 128,        // memories are sized for these capacities;
+  parameter int unsigned PixelCapacity = 4096,      // the table in use is described by the
+  parameter int unsigned RefsPerLane = 32768,       // cell_count_i / roi_*_i inputs
+  parameter int unsigned MaxFeaturesPerFrame = 65535,
+  parameter int unsigned FifoDepth = 8,
+  parameter string InitPrefix = "",                 // "<dir>/": offsets.mem, refs_<k>.mem, sizes_<k>.mem
+  localparam int unsigned CellsPerLane = (CellCapacity + Lanes - 1) / Lanes,
+  localparam int unsigned PixelWidth = (PixelCapacity > 1) ? $clog2(PixelCapacity) : 1,
+  localparam int unsigned OffsetWidth = $clog2(RefsPerLane + 1),
+  localparam int unsigned RangeCountWidth = $clog2(CellsPerLane + 1),
+  localparam int unsigned RangeWidth = OffsetWidth + RangeCountWidth,
+  localparam int unsigned LocalCellWidth = (CellsPerLane > 1) ? $clog2(CellsPerLane) : 1,
+  localparam int unsigned LaneWidth = (Lanes > 1) ? $clog2(Lanes) : 1,
+  localparam int unsigned TableDataWidth = (Lanes * RangeWidth > 32) ? Lanes * RangeWidth : 32
+) (
+  input  logic clk_i,
+  input  logic rst_ni,
+
+  // The loaded table (constants in an FPGA build; registers in a SoC).
+  input  logic [31:0] cell_count_i,   // 1 .. CellCapacity
+  input  logic [15:0] roi_width_i,    // roi_width_i * roi_height_i <= PixelCapacity
+  input  logic [15:0] roi_height_i,
+
+  input  logic frame_start_i,
+  input  logic frame_end_i,
+  output logic busy_o,
+
+  input  logic        feat_valid_i,
+  output logic        feat_ready_o,
+  input  logic [15:0] feat_col_i,
+  input  logic [15:0] feat_row_i,
+
+  output logic        result_valid_o,
+  output logic [31:0] best_cell_o,
+  output count_t      best_votes_o,
+  output logic        runner_valid_o,
+  output logic [31:0] runner_cell_o,
+  output count_t      runner_votes_o,
+  output logic [31:0] votes_o,
+  output logic [31:0] features_o,
+  output logic [31:0] cycles_o,       // frame_start_i to result_valid_o
+  output logic        overflow_o,
+  output logic        roi_error_o,
+
+  // Table loading while idle: sel 0 = offsets word, 1 = lane refs, 2 = lane sizes.
+  input  logic                      tbl_we_i,
+  input  logic [1:0]                tbl_sel_i,
+  input  logic [LaneWidth-1:0]      tbl_lane_i,
+  input  logic [31:0]               tbl_addr_i,
+  input  logic [TableDataWidth-1:0] tbl_data_i,
+
+  // Counter readback while idle or done: value of cell cnt_cell_i one clock later.
+  input  logic [31:0] cnt_cell_i,
+  output count_t      cnt_data_o
+);
+
+  initial begin
+    assert (Lanes == 1 || Lanes == 2 || Lanes == 4 || Lanes == 8) else $fatal(1, "Lanes must be 1, 2, 4 or 8");
+    assert (CellCapacity >= 1 && PixelCapacity >= 1);
+  end
+
+  typedef enum logic [2:0] {StIdle, StClear, StRun, StDrain, StMerge, StDone} state_e;
+  state_e state_q, state_d;
+  logic end_pending_q;  // frame_end_i seen during StClear or StRun
+
+  // ----------------------------------------------------------------- intake
+  logic [Lanes-1:0] lane_idle, lane_room;
+  logic [$clog2(FifoDepth):0] lane_free [Lanes];
+  for (genvar k = 0; k < Lanes; k++) begin : g_room
+    assign lane_room[k] = lane_free[k] >= 2;
+  end
+
+  assign feat_ready_o = (state_q == StRun) && (&lane_room);
+  wire take = feat_valid_i && feat_ready_o;
+  wire in_roi = (feat_col_i < roi_width_i) && (feat_row_i < roi_height_i);
+
+  logic [31:0] features_q;
+  logic        overflow_q, roi_error_q, pushing_q;
+  wire accept = take && in_roi && (features_q < MaxFeaturesPerFrame);
+  // In range whenever in_roi (roi_width_i * roi_height_i <= PixelCapacity).
+  wire [PixelWidth-1:0] pixel = PixelWidth'(32'(feat_row_i) * 32'(roi_width_i) + 32'(feat_col_i));
+
+  logic [Lanes*RangeWidth-1:0] offsets_word;
+  gbt_sync_ram #(.Depth(PixelCapacity), .WidthBits(Lanes * RangeWidth),
+                 .InitFile(InitPrefix == "" ? "" : {InitPrefix, "offsets.mem"})) u_offsets (
+    .clk_i, .raddr_i(pixel), .rdata_o(offsets_word),
+    .we_i(tbl_we_i && tbl_sel_i == 2'd0), .waddr_i(tbl_addr_i[PixelWidth-1:0]),
+    .wdata_i(tbl_data_i[Lanes*RangeWidth-1:0])
+  );
+
+  always_ff @(posedge clk_i or negedge rst_ni) begin
+    if (!rst_ni) begin
+      features_q <= '0;
+      overflow_q <= 1'b0;
+      roi_error_q <= 1'b0;
+      pushing_q <= 1'b0;
+    end else if (frame_start_i && (state_q == StIdle || state_q == StDone)) begin
+      features_q <= '0;
+      overflow_q <= 1'b0;
+      roi_error_q <= 1'b0;
+      pushing_q <= 1'b0;
+    end else begin
+      pushing_q <= accept;
+      if (accept) features_q <= features_q + 1;
+      if (take && !in_roi) roi_error_q <= 1'b1;
+      if (take && in_roi && !accept) overflow_q <= 1'b1;
+    end
+  end
+
+  // ------------------------------------------------------------------ lanes
+  logic        l_best_valid [Lanes], l_runner_valid [Lanes];
+  logic [31:0] l_best_cell [Lanes], l_runner_cell [Lanes], l_votes [Lanes];
+  count_t      l_best_votes [Lanes], l_runner_votes [Lanes], l_cnt [Lanes];
+  size_t       l_best_size [Lanes], l_runner_size [Lanes];
+
+  wire clear = frame_start_i && (state_q == StIdle || state_q == StDone);
+
+  for (genvar k = 0; k < Lanes; k++) begin : g_lane
+    wire [RangeWidth-1:0] range = offsets_word[k*RangeWidth +: RangeWidth];
+    wire [RangeCountWidth-1:0] count = range[RangeCountWidth-1:0];
+    gbt_vote_lane #(
+      .Lanes(Lanes), .LaneIndex(k), .CellsPerLane(CellsPerLane), .RefsPerLane(RefsPerLane), .FifoDepth(FifoDepth),
+      .RefsInitFile(InitPrefix == "" ? "" : {InitPrefix, "refs_", 8'(48 + k), ".mem"}),
+      .SizesInitFile(InitPrefix == "" ? "" : {InitPrefix, "sizes_", 8'(48 + k), ".mem"})
+    ) u_lane (
+      .clk_i, .rst_ni,
+      .clear_i(clear), .cell_count_i, .idle_o(lane_idle[k]),
+      .range_push_i(pushing_q && count != '0),
+      .range_begin_i(range[RangeWidth-1:RangeCountWidth]),
+      .range_count_i(count),
+      .range_free_o(lane_free[k]),
+      .best_valid_o(l_best_valid[k]), .best_cell_o(l_best_cell[k]), .best_votes_o(l_best_votes[k]),
+      .best_size_o(l_best_size[k]),
+      .runner_valid_o(l_runner_valid[k]), .runner_cell_o(l_runner_cell[k]), .runner_votes_o(l_runner_votes[k]),
+      .runner_size_o(l_runner_size[k]),
+      .votes_o(l_votes[k]),
+      .tbl_refs_we_i(tbl_we_i && tbl_sel_i == 2'd1 && 32'(tbl_lane_i) == k),
+      .tbl_sizes_we_i(tbl_we_i && tbl_sel_i == 2'd2 && 32'(tbl_lane_i) == k),
+      .tbl_addr_i, .tbl_data_i(tbl_data_i[31:0]),
+      .cnt_raddr_i(LocalCellWidth'(cnt_cell_i / Lanes)),
+      .cnt_rdata_o(l_cnt[k])
+    );
+  end
+
+  // Readback mux: the lane of the cell asked for one clock ago.
+  logic [LaneWidth-1:0] cnt_lane_q;
+  always_ff @(posedge clk_i) cnt_lane_q <= LaneWidth'(cnt_cell_i % Lanes);
+  assign cnt_data_o = l_cnt[cnt_lane_q];
+
+  // ------------------------------------------------------- control, merge
+  logic [31:0] cycles_q;
+  logic [$clog2(2 * Lanes + 1):0] merge_q;
+  logic        m_best_valid_q, m_runner_valid_q;
+  logic [31:0] m_best_cell_q, m_runner_cell_q;
+  count_t      m_best_votes_q, m_runner_votes_q;
+  size_t       m_best_size_q, m_runner_size_q;
+
+  // Candidate merge_q: lane merge_q/2's best (even) or runner-up (odd).
+  wire [31:0] cand_lane = 32'(merge_q) >> 1;
+  wire cand_is_runner = merge_q[0];
+  logic        cand_valid;
+  logic [31:0] cand_cell;
+  count_t      cand_votes;
+  size_t       cand_size;
+  always_comb begin
+    cand_valid = 1'b0;
+    cand_cell = '0;
+    cand_votes = '0;
+    cand_size = '0;
+    for (int k = 0; k < Lanes; k++) begin
+      if (cand_lane == k) begin
+        cand_valid = cand_is_runner ? l_runner_valid[k] : l_best_valid[k];
+        cand_cell = cand_is_runner ? l_runner_cell[k] : l_best_cell[k];
+        cand_votes = cand_is_runner ? l_runner_votes[k] : l_best_votes[k];
+        cand_size = cand_is_runner ? l_runner_size[k] : l_best_size[k];
+      end
+    end
+  end
+  wire cand_beats_best = !m_best_valid_q ||
+      ranks_before(cand_cell, cand_votes, cand_size, m_best_cell_q, m_best_votes_q, m_best_size_q);
+  wire cand_beats_runner = !m_runner_valid_q ||
+      ranks_before(cand_cell, cand_votes, cand_size, m_runner_cell_q, m_runner_votes_q, m_runner_size_q);
+
+  always_comb begin
+    state_d = state_q;
+    unique case (state_q)
+      StIdle, StDone: if (frame_start_i) state_d = StClear;
+      StClear: if (&lane_idle) state_d = StRun;
+      StRun: if (frame_end_i || end_pending_q) state_d = StDrain;
+      StDrain: if (!pushing_q && (&lane_idle)) state_d = StMerge;
+      StMerge: if (32'(merge_q) == 2 * Lanes - 1) state_d = StDone;
+      default: state_d = StIdle;
+    endcase
+  end
+
+  always_ff @(posedge clk_i or negedge rst_ni) begin
+    if (!rst_ni) begin
+      state_q <= StIdle;
+      end_pending_q <= 1'b0;
+      cycles_q <= '0;
+      merge_q <= '0;
+      m_best_valid_q <= 1'b0;
+      m_runner_valid_q <= 1'b0;
+      m_best_cell_q <= '0;
+      m_runner_cell_q <= '0;
+      m_best_votes_q <= '0;
+      m_runner_votes_q <= '0;
+      m_best_size_q <= '0;
+      m_runner_size_q <= '0;
+    end else begin
+      state_q <= state_d;
+      if (clear || state_q == StDrain) end_pending_q <= 1'b0;
+      else if (frame_end_i && (state_q == StClear || state_q == StRun)) end_pending_q <= 1'b1;
+      if (clear) begin
+        cycles_q <= '0;
+        merge_q <= '0;
+        m_best_valid_q <= 1'b0;
+        m_runner_valid_q <= 1'b0;
+      end else if (state_q != StDone && state_q != StIdle) begin
+        cycles_q <= cycles_q + 1;
+      end
+      if (state_q == StMerge) begin
+        merge_q <= merge_q + 1'b1;
+        if (cand_valid) begin
+          if (cand_beats_best) begin
+            m_runner_valid_q <= m_best_valid_q;
+            m_runner_cell_q <= m_best_cell_q;
+            m_runner_votes_q <= m_best_votes_q;
+            m_runner_size_q <= m_best_size_q;
+            m_best_valid_q <= 1'b1;
+            m_best_cell_q <= cand_cell;
+            m_best_votes_q <= cand_votes;
+            m_best_size_q <= cand_size;
+          end else if (cand_beats_runner) begin
+            m_runner_valid_q <= 1'b1;
+            m_runner_cell_q <= cand_cell;
+            m_runner_votes_q <= cand_votes;
+            m_runner_size_q <= cand_size;
+          end
+        end
+      end
+    end
+  end
+
+  logic [31:0] votes_sum;
+  always_comb begin
+    votes_sum = '0;
+    for (int k = 0; k < Lanes; k++) votes_sum += l_votes[k];
+  end
+
+  assign busy_o = state_q == StClear || state_q == StDrain || state_q == StMerge;
+  assign result_valid_o = state_q == StDone;
+  assign best_cell_o = m_best_cell_q;
+  assign best_votes_o = m_best_votes_q;
+  assign runner_valid_o = m_runner_valid_q;
+  assign runner_cell_o = m_runner_cell_q;
+  assign runner_votes_o = m_runner_votes_q;
+  assign votes_o = votes_sum;
+  assign features_o = features_q;
+  assign cycles_o = cycles_q;
+  assign overflow_o = overflow_q;
+  assign roi_error_o = roi_error_q;
+
+`ifdef FORMAL
+  // The handshake never drops or duplicates a feature: every feature taken is
+  // counted exactly once as accepted, out of ROI or over capacity.
+  logic [31:0] taken_q, rejected_q;
+  always_ff @(posedge clk_i or negedge rst_ni) begin
+    if (!rst_ni) begin
+      taken_q <= '0;
+      rejected_q <= '0;
+    end else if (clear) begin
+      taken_q <= '0;
+      rejected_q <= '0;
+    end else begin
+      taken_q <= taken_q + 32'(take);
+      rejected_q <= rejected_q + 32'(take && !accept);
+    end
+  end
+  always_ff @(posedge clk_i) begin
+    if (rst_ni && !clear) assert (taken_q == features_q + rejected_q);
+    if (rst_ni && take) assert (state_q == StRun);
+  end
+`endif
+
+endmodule
+
+`default_nettype wire
