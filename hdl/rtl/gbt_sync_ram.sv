@@ -7,12 +7,19 @@
 // and a write of the same address in one cycle returns the old word). This
 // is the block-RAM template yosys maps to iCE40 EBR and Verilator simulates
 // directly. InitFile, when not empty, is loaded with $readmemh.
+//
+// SinglePort = 1: reads and writes share one address (the write address while
+// we_i is high, and rdata_o then holds its previous value) — the form yosys
+// maps to the UltraPlus's 256-kbit SPRAMs. Only for memories that are never
+// read and written in the same cycle (the voter's table memories, written
+// while idle).
 `default_nettype none
 
 module gbt_sync_ram #(
   parameter int unsigned Depth = 256,
   parameter int unsigned WidthBits = 16,
-  parameter string InitFile = "",
+  parameter InitFile = "",  // a string (untyped: yosys 0.23 has no string parameters)
+  parameter bit SinglePort = 1'b0,
   localparam int unsigned AddrWidth = (Depth > 1) ? $clog2(Depth) : 1
 ) (
   input  logic                 clk_i,
@@ -25,14 +32,23 @@ module gbt_sync_ram #(
 
   logic [WidthBits-1:0] mem [Depth];
 
+  // No zeroing loop: FPGA block RAMs power up as zero (and yosys would unroll
+  // it word by word); the voter clears its counters itself at frame start.
   initial begin
-    for (int unsigned i = 0; i < Depth; i++) mem[i] = '0;
     if (InitFile != "") $readmemh(InitFile, mem);
   end
 
-  always_ff @(posedge clk_i) begin
-    if (we_i) mem[waddr_i] <= wdata_i;
-    rdata_o <= mem[raddr_i];
+  if (SinglePort) begin : g_single_port
+    wire [AddrWidth-1:0] addr = we_i ? waddr_i : raddr_i;
+    always_ff @(posedge clk_i) begin
+      if (we_i) mem[addr] <= wdata_i;
+      else rdata_o <= mem[addr];
+    end
+  end else begin : g_dual_port
+    always_ff @(posedge clk_i) begin
+      if (we_i) mem[waddr_i] <= wdata_i;
+      rdata_o <= mem[raddr_i];
+    end
   end
 
 `ifdef FORMAL

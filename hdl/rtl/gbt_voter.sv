@@ -16,25 +16,26 @@
 //     most; a feature is taken when valid && ready. Features outside the ROI
 //     are dropped and raise roi_error_o; features beyond MaxFeaturesPerFrame
 //     are dropped and raise overflow_o (the handshake never stalls on them).
-//   intake: clock t takes a feature and reads its offsets word; clock t+1
-//     pushes each lane's non-empty range into that lane's FIFO. Ready needs two
-//     free FIFO slots in every lane (the push in flight plus this one).
+//   intake: clock t takes a feature, t+1 checks it and forms its pixel
+//     index, t+2 reads its offsets word, t+3 registers it, t+4 pushes each
+//     lane's non-empty range into that lane's FIFO. Ready needs five free
+//     FIFO slots in every lane (four in flight).
 //   frame_end_i (pulse, any time after frame_start_i, even while clearing —
-//     it is latched): the pipelines drain, the lanes' top-2
-//     lists merge over 2*Lanes clocks, then result_valid_o stays high with
+//     it is latched): the pipelines drain, the lanes' top-2 lists merge
+//     (at most 4*Lanes clocks; none with one lane), then result_valid_o stays high with
 //     best/runner/votes/features/cycles until the next frame_start_i.
 //   Steady state: each lane retires one vote per clock; with the references
 //     of a pixel spread over the banks, Lanes votes per clock.
 `default_nettype none
 
-module gbt_voter import gbt_pkg::*; #(
+module gbt_voter #(
   parameter int unsigned Lanes = 1,                 // 1, 2, 4 or 8
   parameter int unsigned CellCapacity = 128,        // memories are sized for these capacities;
   parameter int unsigned PixelCapacity = 4096,      // the table in use is described by the
   parameter int unsigned RefsPerLane = 32768,       // cell_count_i / roi_*_i inputs
   parameter int unsigned MaxFeaturesPerFrame = 65535,
-  parameter int unsigned FifoDepth = 8,
-  parameter string InitPrefix = "",                 // "<dir>/": offsets.mem, refs_<k>.mem, sizes_<k>.mem
+  parameter int unsigned FifoDepth = 16,
+  parameter InitPrefix = "",                        // "<dir>/": offsets.mem, refs_<k>.mem, sizes_<k>.mem
   localparam int unsigned CellsPerLane = (CellCapacity + Lanes - 1) / Lanes,
   localparam int unsigned PixelWidth = (PixelCapacity > 1) ? $clog2(PixelCapacity) : 1,
   localparam int unsigned OffsetWidth = $clog2(RefsPerLane + 1),
@@ -63,10 +64,10 @@ module gbt_voter import gbt_pkg::*; #(
 
   output logic        result_valid_o,
   output logic [31:0] best_cell_o,
-  output count_t      best_votes_o,
+  output gbt_pkg::count_t      best_votes_o,
   output logic        runner_valid_o,
   output logic [31:0] runner_cell_o,
-  output count_t      runner_votes_o,
+  output gbt_pkg::count_t      runner_votes_o,
   output logic [31:0] votes_o,
   output logic [31:0] features_o,
   output logic [31:0] cycles_o,       // frame_start_i to result_valid_o
@@ -82,13 +83,17 @@ module gbt_voter import gbt_pkg::*; #(
 
   // Counter readback while idle or done: value of cell cnt_cell_i one clock later.
   input  logic [31:0] cnt_cell_i,
-  output count_t      cnt_data_o
+  output gbt_pkg::count_t      cnt_data_o
 );
 
+  // Package items are named in full: yosys 0.23 reads no `import` in a module.
+
+`ifndef SYNTHESIS
   initial begin
-    assert (Lanes == 1 || Lanes == 2 || Lanes == 4 || Lanes == 8) else $fatal(1, "Lanes must be 1, 2, 4 or 8");
-    assert (CellCapacity >= 1 && PixelCapacity >= 1);
+    if (!(Lanes == 1 || Lanes == 2 || Lanes == 4 || Lanes == 8)) $fatal(1, "Lanes must be 1, 2, 4 or 8");
+    if (CellCapacity < 1 || PixelCapacity < 1) $fatal(1, "capacities must be at least 1");
   end
+`endif
 
   typedef enum logic [2:0] {StIdle, StClear, StRun, StDrain, StMerge, StDone} state_e;
   state_e state_q, state_d;
@@ -98,56 +103,101 @@ module gbt_voter import gbt_pkg::*; #(
   logic [Lanes-1:0] lane_idle, lane_room;
   logic [$clog2(FifoDepth):0] lane_free [Lanes];
   for (genvar k = 0; k < Lanes; k++) begin : g_room
-    assign lane_room[k] = lane_free[k] >= 2;
+    assign lane_room[k] = lane_free[k] >= 5;
   end
 
+  // Intake stages keep the input pins, the ROI check with the pixel-index
+  // multiply-add, and the RAM address apart, one clock each:
+  //   I0 (clock t):   a feature is taken and registered
+  //   I1 (clock t+1): ROI and capacity checks, pixel index registered
+  //   I2 (clock t+2): offsets RAM read
+  //   I3 (clock t+3): offsets word registered (block RAM clock-to-out is slow)
+  //   I4 (clock t+4): each lane's non-empty range pushed into its FIFO
+  // Four features can be in flight, so ready needs five free slots per lane.
   assign feat_ready_o = (state_q == StRun) && (&lane_room);
   wire take = feat_valid_i && feat_ready_o;
-  wire in_roi = (feat_col_i < roi_width_i) && (feat_row_i < roi_height_i);
 
+  logic        in_valid_q;
+  logic [15:0] in_col_q, in_row_q;
   logic [31:0] features_q;
-  logic        overflow_q, roi_error_q, pushing_q;
-  wire accept = take && in_roi && (features_q < MaxFeaturesPerFrame);
+  logic        overflow_q, roi_error_q, pixel_valid_q, pushing_q;
+  logic [PixelWidth-1:0] pixel_q;
+  // Capacity as a registered flag, kept exact by a count of remaining room,
+  // so accept is one LUT deep after the ROI comparison.
+  localparam int unsigned RoomWidth = $clog2(MaxFeaturesPerFrame + 1);
+  logic [RoomWidth-1:0] room_left_q;
+  logic                 room_q;
+  wire in_roi = (in_col_q < roi_width_i) && (in_row_q < roi_height_i);
+  wire accept = in_valid_q && in_roi && room_q;
   // In range whenever in_roi (roi_width_i * roi_height_i <= PixelCapacity).
-  wire [PixelWidth-1:0] pixel = PixelWidth'(32'(feat_row_i) * 32'(roi_width_i) + 32'(feat_col_i));
+  wire [PixelWidth-1:0] pixel = PixelWidth'(32'(in_row_q) * 32'(roi_width_i) + 32'(in_col_q));
 
-  logic [Lanes*RangeWidth-1:0] offsets_word;
-  gbt_sync_ram #(.Depth(PixelCapacity), .WidthBits(Lanes * RangeWidth),
+  logic [Lanes*RangeWidth-1:0] offsets_word, offsets_word_q;
+  logic                        word_valid_q;
+  gbt_sync_ram #(.Depth(PixelCapacity), .WidthBits(Lanes * RangeWidth), .SinglePort(1'b1),
                  .InitFile(InitPrefix == "" ? "" : {InitPrefix, "offsets.mem"})) u_offsets (
-    .clk_i, .raddr_i(pixel), .rdata_o(offsets_word),
+    .clk_i, .raddr_i(pixel_q), .rdata_o(offsets_word),
     .we_i(tbl_we_i && tbl_sel_i == 2'd0), .waddr_i(tbl_addr_i[PixelWidth-1:0]),
     .wdata_i(tbl_data_i[Lanes*RangeWidth-1:0])
   );
 
   always_ff @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
+      in_valid_q <= 1'b0;
+      in_col_q <= '0;
+      in_row_q <= '0;
       features_q <= '0;
       overflow_q <= 1'b0;
       roi_error_q <= 1'b0;
+      pixel_valid_q <= 1'b0;
+      pixel_q <= '0;
+      word_valid_q <= 1'b0;
+      offsets_word_q <= '0;
       pushing_q <= 1'b0;
+      room_left_q <= RoomWidth'(MaxFeaturesPerFrame);
+      room_q <= MaxFeaturesPerFrame > 0;
     end else if (frame_start_i && (state_q == StIdle || state_q == StDone)) begin
+      in_valid_q <= 1'b0;
       features_q <= '0;
       overflow_q <= 1'b0;
       roi_error_q <= 1'b0;
+      pixel_valid_q <= 1'b0;
+      word_valid_q <= 1'b0;
       pushing_q <= 1'b0;
+      room_left_q <= RoomWidth'(MaxFeaturesPerFrame);
+      room_q <= MaxFeaturesPerFrame > 0;
     end else begin
-      pushing_q <= accept;
-      if (accept) features_q <= features_q + 1;
-      if (take && !in_roi) roi_error_q <= 1'b1;
-      if (take && in_roi && !accept) overflow_q <= 1'b1;
+      in_valid_q <= take;
+      if (take) begin
+        in_col_q <= feat_col_i;
+        in_row_q <= feat_row_i;
+      end
+      pixel_valid_q <= accept;
+      pixel_q <= pixel;
+      word_valid_q <= pixel_valid_q;
+      offsets_word_q <= offsets_word;
+      pushing_q <= word_valid_q;
+      if (accept) begin
+        room_left_q <= room_left_q - 1'b1;
+        room_q <= room_left_q != RoomWidth'(1);
+      end
+      // Counted one clock after acceptance (from a register, off the accept path).
+      features_q <= features_q + 32'(pixel_valid_q);
+      if (in_valid_q && !in_roi) roi_error_q <= 1'b1;
+      if (in_valid_q && in_roi && !accept) overflow_q <= 1'b1;
     end
   end
 
   // ------------------------------------------------------------------ lanes
   logic        l_best_valid [Lanes], l_runner_valid [Lanes];
   logic [31:0] l_best_cell [Lanes], l_runner_cell [Lanes], l_votes [Lanes];
-  count_t      l_best_votes [Lanes], l_runner_votes [Lanes], l_cnt [Lanes];
-  size_t       l_best_size [Lanes], l_runner_size [Lanes];
+  gbt_pkg::count_t      l_best_votes [Lanes], l_runner_votes [Lanes], l_cnt [Lanes];
+  gbt_pkg::size_t       l_best_size [Lanes], l_runner_size [Lanes];
 
   wire clear = frame_start_i && (state_q == StIdle || state_q == StDone);
 
   for (genvar k = 0; k < Lanes; k++) begin : g_lane
-    wire [RangeWidth-1:0] range = offsets_word[k*RangeWidth +: RangeWidth];
+    wire [RangeWidth-1:0] range = offsets_word_q[k*RangeWidth +: RangeWidth];
     wire [RangeCountWidth-1:0] count = range[RangeCountWidth-1:0];
     gbt_vote_lane #(
       .Lanes(Lanes), .LaneIndex(k), .CellsPerLane(CellsPerLane), .RefsPerLane(RefsPerLane), .FifoDepth(FifoDepth),
@@ -179,20 +229,27 @@ module gbt_voter import gbt_pkg::*; #(
   assign cnt_data_o = l_cnt[cnt_lane_q];
 
   // ------------------------------------------------------- control, merge
+  // With several lanes, the lanes' top-2 lists (2*Lanes candidates) are
+  // merged at frame end with one shared comparator: each candidate is first
+  // compared with the merged best and, if it does not beat it, with the
+  // merged runner-up in the next clock (at most 4*Lanes clocks). One lane's
+  // top-2 is already the answer.
   logic [31:0] cycles_q;
-  logic [$clog2(2 * Lanes + 1):0] merge_q;
+  localparam int unsigned MergeWidth = $clog2(2 * Lanes + 1);
+  logic [MergeWidth-1:0] merge_q;      // candidate index
+  logic                  merge_runner_q;  // second phase: compare with the runner-up
   logic        m_best_valid_q, m_runner_valid_q;
   logic [31:0] m_best_cell_q, m_runner_cell_q;
-  count_t      m_best_votes_q, m_runner_votes_q;
-  size_t       m_best_size_q, m_runner_size_q;
+  gbt_pkg::count_t m_best_votes_q, m_runner_votes_q;
+  gbt_pkg::size_t  m_best_size_q, m_runner_size_q;
 
   // Candidate merge_q: lane merge_q/2's best (even) or runner-up (odd).
   wire [31:0] cand_lane = 32'(merge_q) >> 1;
   wire cand_is_runner = merge_q[0];
   logic        cand_valid;
   logic [31:0] cand_cell;
-  count_t      cand_votes;
-  size_t       cand_size;
+  gbt_pkg::count_t cand_votes;
+  gbt_pkg::size_t  cand_size;
   always_comb begin
     cand_valid = 1'b0;
     cand_cell = '0;
@@ -207,10 +264,14 @@ module gbt_voter import gbt_pkg::*; #(
       end
     end
   end
-  wire cand_beats_best = !m_best_valid_q ||
-      ranks_before(cand_cell, cand_votes, cand_size, m_best_cell_q, m_best_votes_q, m_best_size_q);
-  wire cand_beats_runner = !m_runner_valid_q ||
-      ranks_before(cand_cell, cand_votes, cand_size, m_runner_cell_q, m_runner_votes_q, m_runner_size_q);
+  wire        against_valid = merge_runner_q ? m_runner_valid_q : m_best_valid_q;
+  wire [31:0] against_cell = merge_runner_q ? m_runner_cell_q : m_best_cell_q;
+  wire gbt_pkg::count_t against_votes = merge_runner_q ? m_runner_votes_q : m_best_votes_q;
+  wire gbt_pkg::size_t  against_size = merge_runner_q ? m_runner_size_q : m_best_size_q;
+  wire cand_wins = !against_valid || gbt_pkg::ranks_before(cand_cell, cand_votes, cand_size, against_cell, against_votes, against_size);
+  wire merge_last = 32'(merge_q) == 2 * Lanes - 1;
+  // The candidate is settled this clock: invalid, placed, or rejected by both.
+  wire merge_advance = !cand_valid || cand_wins || merge_runner_q;
 
   always_comb begin
     state_d = state_q;
@@ -218,8 +279,8 @@ module gbt_voter import gbt_pkg::*; #(
       StIdle, StDone: if (frame_start_i) state_d = StClear;
       StClear: if (&lane_idle) state_d = StRun;
       StRun: if (frame_end_i || end_pending_q) state_d = StDrain;
-      StDrain: if (!pushing_q && (&lane_idle)) state_d = StMerge;
-      StMerge: if (32'(merge_q) == 2 * Lanes - 1) state_d = StDone;
+      StDrain: if (!in_valid_q && !pixel_valid_q && !word_valid_q && !pushing_q && (&lane_idle)) state_d = (Lanes == 1) ? StDone : StMerge;
+      StMerge: if (Lanes == 1 || (merge_last && merge_advance)) state_d = StDone;  // constant for one lane: merge logic drops out
       default: state_d = StIdle;
     endcase
   end
@@ -230,6 +291,7 @@ module gbt_voter import gbt_pkg::*; #(
       end_pending_q <= 1'b0;
       cycles_q <= '0;
       merge_q <= '0;
+      merge_runner_q <= 1'b0;
       m_best_valid_q <= 1'b0;
       m_runner_valid_q <= 1'b0;
       m_best_cell_q <= '0;
@@ -245,15 +307,17 @@ module gbt_voter import gbt_pkg::*; #(
       if (clear) begin
         cycles_q <= '0;
         merge_q <= '0;
+        merge_runner_q <= 1'b0;
         m_best_valid_q <= 1'b0;
         m_runner_valid_q <= 1'b0;
       end else if (state_q != StDone && state_q != StIdle) begin
         cycles_q <= cycles_q + 1;
       end
       if (state_q == StMerge) begin
-        merge_q <= merge_q + 1'b1;
-        if (cand_valid) begin
-          if (cand_beats_best) begin
+        merge_runner_q <= !merge_advance;
+        if (merge_advance) merge_q <= merge_q + 1'b1;
+        if (cand_valid && cand_wins) begin
+          if (!merge_runner_q) begin  // the new best; the old best becomes runner-up
             m_runner_valid_q <= m_best_valid_q;
             m_runner_cell_q <= m_best_cell_q;
             m_runner_votes_q <= m_best_votes_q;
@@ -262,7 +326,7 @@ module gbt_voter import gbt_pkg::*; #(
             m_best_cell_q <= cand_cell;
             m_best_votes_q <= cand_votes;
             m_best_size_q <= cand_size;
-          end else if (cand_beats_runner) begin
+          end else begin
             m_runner_valid_q <= 1'b1;
             m_runner_cell_q <= cand_cell;
             m_runner_votes_q <= cand_votes;
@@ -281,11 +345,11 @@ module gbt_voter import gbt_pkg::*; #(
 
   assign busy_o = state_q == StClear || state_q == StDrain || state_q == StMerge;
   assign result_valid_o = state_q == StDone;
-  assign best_cell_o = m_best_cell_q;
-  assign best_votes_o = m_best_votes_q;
-  assign runner_valid_o = m_runner_valid_q;
-  assign runner_cell_o = m_runner_cell_q;
-  assign runner_votes_o = m_runner_votes_q;
+  assign best_cell_o = (Lanes == 1) ? l_best_cell[0] : m_best_cell_q;
+  assign best_votes_o = (Lanes == 1) ? l_best_votes[0] : m_best_votes_q;
+  assign runner_valid_o = (Lanes == 1) ? l_runner_valid[0] : m_runner_valid_q;
+  assign runner_cell_o = (Lanes == 1) ? l_runner_cell[0] : m_runner_cell_q;
+  assign runner_votes_o = (Lanes == 1) ? l_runner_votes[0] : m_runner_votes_q;
   assign votes_o = votes_sum;
   assign features_o = features_q;
   assign cycles_o = cycles_q;
@@ -305,11 +369,11 @@ module gbt_voter import gbt_pkg::*; #(
       rejected_q <= '0;
     end else begin
       taken_q <= taken_q + 32'(take);
-      rejected_q <= rejected_q + 32'(take && !accept);
+      rejected_q <= rejected_q + 32'(in_valid_q && !accept);
     end
   end
   always_ff @(posedge clk_i) begin
-    if (rst_ni && !clear) assert (taken_q == features_q + rejected_q);
+    if (rst_ni && !clear) assert (taken_q == features_q + rejected_q + 32'(in_valid_q) + 32'(pixel_valid_q));
     if (rst_ni && take) assert (state_q == StRun);
   end
 `endif
