@@ -51,11 +51,11 @@ module gbt_sync_ram #(
     end
   end
 
-`ifdef FORMAL
+`ifndef SYNTHESIS
   // Every access stays inside the memory (Depth need not be a power of two).
   always_ff @(posedge clk_i) begin
-    assert (32'(raddr_i) < Depth);
-    if (we_i) assert (32'(waddr_i) < Depth);
+    ReadInRange: assert (32'(raddr_i) < Depth);
+    if (we_i) WriteInRange: assert (32'(waddr_i) < Depth);
   end
 `endif
 

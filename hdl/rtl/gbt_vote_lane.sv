@@ -307,7 +307,7 @@ module gbt_vote_lane #(
   assign votes_o = votes_q;
   assign idle_o = fifo_empty && !gen_active_q && !s2_valid_q && !s3_valid_q && !s4_valid_q && !s5_valid_q && !clearing_q;
 
-  // Checked in simulation (Verilator --assert) and proven (tests/hdl formal):
+  // Checked in simulation (Verilator --assert) on every clock of the co-simulation:
   // counters never wrap and never decrease within a frame — each write is the
   // value read plus one, or the saturated maximum; addresses stay in range;
   // the intake's slack rule never pushes into a full FIFO.

@@ -129,8 +129,9 @@ module gbt_voter #(
   logic                 room_q;
   wire in_roi = (in_col_q < roi_width_i) && (in_row_q < roi_height_i);
   wire accept = in_valid_q && in_roi && room_q;
-  // In range whenever in_roi (roi_width_i * roi_height_i <= PixelCapacity).
-  wire [PixelWidth-1:0] pixel = PixelWidth'(32'(in_row_q) * 32'(roi_width_i) + 32'(in_col_q));
+  // PixelWidth-bit arithmetic is exact whenever in_roi: row * width + col <
+  // width * height <= PixelCapacity <= 2^PixelWidth.
+  wire [PixelWidth-1:0] pixel = PixelWidth'(in_row_q) * PixelWidth'(roi_width_i) + PixelWidth'(in_col_q);
 
   logic [Lanes*RangeWidth-1:0] offsets_word, offsets_word_q;
   logic                        word_valid_q;
@@ -356,9 +357,10 @@ module gbt_voter #(
   assign overflow_o = overflow_q;
   assign roi_error_o = roi_error_q;
 
-`ifdef FORMAL
+`ifndef SYNTHESIS
   // The handshake never drops or duplicates a feature: every feature taken is
-  // counted exactly once as accepted, out of ROI or over capacity.
+  // counted exactly once as accepted, out of ROI or over capacity (checked in
+  // simulation on every clock of the co-simulation).
   logic [31:0] taken_q, rejected_q;
   always_ff @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
@@ -372,10 +374,12 @@ module gbt_voter #(
       rejected_q <= rejected_q + 32'(in_valid_q && !accept);
     end
   end
+  /* verilator lint_off SYNCASYNCNET */  // rst_ni only quiets the checks during reset
   always_ff @(posedge clk_i) begin
-    if (rst_ni && !clear) assert (taken_q == features_q + rejected_q + 32'(in_valid_q) + 32'(pixel_valid_q));
-    if (rst_ni && take) assert (state_q == StRun);
+    if (rst_ni && !clear) EveryFeatureCounted: assert (taken_q == features_q + rejected_q + 32'(in_valid_q) + 32'(pixel_valid_q));
+    if (rst_ni && take) TakenOnlyWhileRunning: assert (state_q == StRun);
   end
+  /* verilator lint_on SYNCASYNCNET */
 `endif
 
 endmodule
