@@ -12,7 +12,6 @@ module gbt_fifo #(
 ) (
   input  logic                 clk_i,
   input  logic                 rst_ni,
-  input  logic                 clear_i,
   input  logic                 push_i,
   input  logic [WidthBits-1:0] wdata_i,
   input  logic                 pop_i,
@@ -36,10 +35,6 @@ module gbt_fifo #(
 
   always_ff @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
-      rd_q <= '0;
-      wr_q <= '0;
-      used_q <= '0;
-    end else if (clear_i) begin
       rd_q <= '0;
       wr_q <= '0;
       used_q <= '0;

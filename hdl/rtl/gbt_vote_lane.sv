@@ -80,7 +80,7 @@ module gbt_vote_lane #(
   logic fifo_empty, fifo_full, pop;
 
   gbt_fifo #(.Depth(FifoDepth), .WidthBits(OffsetWidth + RangeCountWidth)) u_fifo (
-    .clk_i, .rst_ni, .clear_i(1'b0),
+    .clk_i, .rst_ni,
     .push_i(range_push_i), .wdata_i({range_begin_i, range_count_i}),
     .pop_i(pop), .rdata_o({head_begin, head_count}),
     .empty_o(fifo_empty), .full_o(fifo_full), .free_o(range_free_o)

@@ -51,8 +51,8 @@ module gbt_voter_table #(
 
   gbt_voter #(
     .Lanes(gabarit_table_pkg::Lanes),
-    .CellCapacity(gabarit_table_pkg::CellCount),
-    .PixelCapacity(gabarit_table_pkg::PixelCount),
+    .CellCapacity(gabarit_table_pkg::CellCapacity),
+    .PixelCapacity(gabarit_table_pkg::PixelCapacity),
     .RefsPerLane(gabarit_table_pkg::RefsPerLane),
     .MaxFeaturesPerFrame(MaxFeaturesPerFrame),
     .InitPrefix(InitPrefix)

@@ -6,8 +6,11 @@
 #include <verilated.h>
 #include <verilated_fst_c.h>
 
+#include <unistd.h>
+
 #include <cstdint>
 #include <cstdio>
+#include <cstdlib>
 #include <memory>
 #include <sstream>
 #include <string>
@@ -101,6 +104,14 @@ class Harness {
   ~Harness() {
     if (trace_) trace_->close();
     model_->final();
+    // Line/toggle coverage (models are verilated with COVERAGE): one file per
+    // harness in $VERILATOR_COVERAGE_DIR, merged by the hdl-coverage target.
+    if (const char* dir = std::getenv("VERILATOR_COVERAGE_DIR"); dir && *dir) {
+      static int serial = 0;
+      const std::string path = std::string(dir) + "/coverage_" + model_->modelName() + "_" + std::to_string(::getpid()) + "_" +
+                               std::to_string(serial++) + ".dat";
+      context_->coveragep()->write(path.c_str());
+    }
   }
   Model& model() { return *model_; }
   std::uint64_t cycle() const { return cycle_; }

@@ -137,7 +137,10 @@ int tables_export_hdl(const std::vector<std::string>& argv) {
             "Writes the hardware voter's memory images ($readmemh: offsets.mem, refs_<k>.mem, sizes_<k>.mem) and\n"
             "a SystemVerilog package with the table's sizes (gabarit_table_pkg.sv) for hdl/rtl/gbt_voter_table.sv.",
             {{"--out", "DIR", "output directory", false, true},
-             {"--lanes", "N", "voting lanes: 1, 2, 4 or 8 (default 1)"}},
+             {"--lanes", "N", "voting lanes: 1, 2, 4 or 8 (default 1)"},
+             {"--cells", "N", "voter CellCapacity the images are for (default: the table's cell count)"},
+             {"--pixels", "N", "voter PixelCapacity (default: the table's ROI pixels)"},
+             {"--refs-per-lane", "N", "voter RefsPerLane (default: the table's largest lane)"}},
             "TABLE");
   if (!args.parse(argv)) return 0;
   if (args.positionals().size() != 1) throw UsageError("give exactly one TABLE");
@@ -149,7 +152,11 @@ int tables_export_hdl(const std::vector<std::string>& argv) {
   if (const Status s = TableView::open(file.bytes(), view); s != Status::kOk) {
     throw host::Error(path + ": not a valid table: " + status_name(s));
   }
-  std::fprintf(stderr, "%s\n", host::write_hdl_export(host::hdl_layout(view, lanes), args.get("--out")).c_str());
+  host::HdlCapacities cap;
+  cap.cells = static_cast<std::uint32_t>(args.integer("--cells", 0, 1, table_format::kMaxCells));
+  cap.pixels = static_cast<std::uint32_t>(args.integer("--pixels", 0, 1, table_format::kMaxRoiPixels));
+  cap.refs_per_lane = static_cast<std::uint32_t>(args.integer("--refs-per-lane", 0, 1, table_format::kMaxReferences));
+  std::fprintf(stderr, "%s\n", host::write_hdl_export(host::hdl_layout(view, lanes), args.get("--out"), cap).c_str());
   return 0;
 }
 

@@ -50,8 +50,15 @@ HdlWidths hdl_widths(std::uint32_t lanes, std::uint32_t cell_capacity, std::uint
 // Offsets word of one pixel, as 32-bit chunks, least significant first.
 std::vector<std::uint32_t> hdl_offsets_word(const HdlLayout& layout, std::uint32_t pixel, const HdlWidths& widths);
 
+// Hardware capacities the images are written for (the voter's CellCapacity,
+// PixelCapacity, RefsPerLane); 0 = exactly this table's sizes.
+struct HdlCapacities {
+  std::uint32_t cells = 0, pixels = 0, refs_per_lane = 0;
+};
+
 // Writes offsets.mem, refs_<k>.mem, sizes_<k>.mem and gabarit_table_pkg.sv
-// (capacities equal to this table) into `dir`. Returns a one-line summary.
-std::string write_hdl_export(const HdlLayout& layout, const std::string& dir);
+// into `dir`. Throws Error if the table exceeds the capacities. Returns a
+// one-line summary.
+std::string write_hdl_export(const HdlLayout& layout, const std::string& dir, HdlCapacities capacities = {});
 
 }  // namespace gabarit::host

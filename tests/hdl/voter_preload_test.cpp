@@ -1,0 +1,39 @@
+// `gabarit tables export-hdl` end to end: a voter whose memories were loaded
+// by $readmemh from the exported images (no table port writes at all) must
+// vote exactly like the kernel on the same table file.
+#include <gtest/gtest.h>
+
+#include "Vvoter_preload.h"
+#include "experiments.hpp"
+#include "gabarit/features.hpp"
+#include "gabarit/host/mapped_file.hpp"
+#include "gabarit/host/thesis_shapes.hpp"
+#include "voter_harness.hpp"
+
+namespace gabarit::hdl {
+namespace {
+
+TEST(VoterPreload, ExportedImagesLoadedByReadmemhVoteLikeTheKernel) {
+  const auto bytes = host::read_file(GABARIT_PRELOAD_TABLE);
+  TableView t;
+  ASSERT_EQ(TableView::open(bytes, t), Status::kOk);
+  Harness<Vvoter_preload> h;
+  h.model().cell_count_i = t.cell_count();
+  h.model().roi_width_i = t.roi_width();
+  h.model().roi_height_i = t.roi_height();
+  const bench::Shape shape = bench::make_shape("curve", host::thesis_curve());
+  const auto trials = bench::make_trials(shape, 0.3, 10, 5);
+  for (std::size_t i = 0; i < trials.size(); ++i) {
+    const auto& tr = trials[i];
+    const ImageWindow w{tr.previous.x + t.roi_origin_x(), tr.previous.y + t.roi_origin_y(), t.roi_width(), t.roi_height()};
+    std::vector<RoiPoint> f(t.roi_pixels());
+    FeatureCount fc;
+    ASSERT_EQ(extract_binary(tr.frame.view(), w, f, fc), Status::kOk);
+    f.resize(fc.written);
+    host::Rng rng(i);
+    EXPECT_EQ(compare(h.frame(f, t.cell_count(), 0.1, rng), kernel_outcome(t, f)), "") << "frame " << i;
+  }
+}
+
+}  // namespace
+}  // namespace gabarit::hdl
