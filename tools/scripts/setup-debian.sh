@@ -9,6 +9,8 @@ packages=(
   gcc-arm-none-eabi libnewlib-arm-none-eabi libstdc++-arm-none-eabi-newlib
   libopencv-imgproc-dev   # gabarit bench's peer (matchTemplate); never linked into the tracker
   python3-skimage netpbm  # the real photograph behind the 'watch' shape, converted at run time
+  verilator zlib1g-dev    # hardware voter co-simulation (FST waveforms need zlib)
+  yosys nextpnr-ice40 fpga-icestorm  # hardware voter synthesis and place-and-route
 )
 missing=()
 for p in "${packages[@]}"; do
