@@ -139,12 +139,7 @@ void sequence_cosim(const char* model, std::uint32_t lanes, double min_votes_per
   for (double noise : {0.2, 0.4}) {
     const auto trials = bench::make_trials(shape, noise, 25, 99);
     for (std::size_t i = 0; i < trials.size(); ++i) {
-      const auto& tr = trials[i];
-      const ImageWindow w{tr.previous.x + t.roi_origin_x(), tr.previous.y + t.roi_origin_y(), t.roi_width(), t.roi_height()};
-      std::vector<RoiPoint> f(t.roi_pixels());
-      FeatureCount fc;
-      ASSERT_EQ(extract_binary(tr.frame.view(), w, f, fc), Status::kOk);
-      f.resize(fc.written);
+      const auto f = trial_features(t, trials[i].frame, trials[i].previous.x, trials[i].previous.y);
       host::Rng rng(i);
       const Outcome hw = h.frame(f, t.cell_count(), 0.0, rng);
       const Outcome sw = kernel_outcome(t, f);

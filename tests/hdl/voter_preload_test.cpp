@@ -24,12 +24,7 @@ TEST(VoterPreload, ExportedImagesLoadedByReadmemhVoteLikeTheKernel) {
   const bench::Shape shape = bench::make_shape("curve", host::thesis_curve());
   const auto trials = bench::make_trials(shape, 0.3, 10, 5);
   for (std::size_t i = 0; i < trials.size(); ++i) {
-    const auto& tr = trials[i];
-    const ImageWindow w{tr.previous.x + t.roi_origin_x(), tr.previous.y + t.roi_origin_y(), t.roi_width(), t.roi_height()};
-    std::vector<RoiPoint> f(t.roi_pixels());
-    FeatureCount fc;
-    ASSERT_EQ(extract_binary(tr.frame.view(), w, f, fc), Status::kOk);
-    f.resize(fc.written);
+    const auto f = trial_features(t, trials[i].frame, trials[i].previous.x, trials[i].previous.y);
     host::Rng rng(i);
     EXPECT_EQ(compare(h.frame(f, t.cell_count(), 0.1, rng), kernel_outcome(t, f)), "") << "frame " << i;
   }
