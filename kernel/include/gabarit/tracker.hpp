@@ -6,7 +6,7 @@
 // d = (roi_origin_x + col, roi_origin_y + row) from c in the *table frame*,
 // which is the image frame rotated by the previous angle theta: an image
 // pixel p maps to d = R(-theta) (p - c), rounded to the nearest pixel. With a
-// winning cell U (centre t = (tx, ty), angle centre a, depth n) the new pose is
+// winning cell U (centre t = (tx, ty), angle centre a, depth n) the updated pose is
 //   (x, y) = c + R(theta) t,   theta' = theta + a,   depth' = n.
 // With theta = 0 this is exactly "previous pose plus the centre of the cell".
 // Model point m (relative to the reference point) then lies at
