@@ -43,6 +43,7 @@ module gbt_voter #(
   localparam int unsigned RangeWidth = OffsetWidth + RangeCountWidth,
   localparam int unsigned LocalCellWidth = (CellsPerLane > 1) ? $clog2(CellsPerLane) : 1,
   localparam int unsigned LaneWidth = (Lanes > 1) ? $clog2(Lanes) : 1,
+  localparam int unsigned LaneShift = $clog2(Lanes),  // Lanes is a power of two: c / Lanes = c >> LaneShift
   localparam int unsigned TableDataWidth = (Lanes * RangeWidth > 32) ? Lanes * RangeWidth : 32
 ) (
   input  logic clk_i,
@@ -219,14 +220,14 @@ module gbt_voter #(
       .tbl_refs_we_i(tbl_we_i && tbl_sel_i == 2'd1 && 32'(tbl_lane_i) == k),
       .tbl_sizes_we_i(tbl_we_i && tbl_sel_i == 2'd2 && 32'(tbl_lane_i) == k),
       .tbl_addr_i, .tbl_data_i(tbl_data_i[31:0]),
-      .cnt_raddr_i(LocalCellWidth'(cnt_cell_i / Lanes)),
+      .cnt_raddr_i(LocalCellWidth'(cnt_cell_i >> LaneShift)),
       .cnt_rdata_o(l_cnt[k])
     );
   end
 
   // Readback mux: the lane of the cell asked for one clock ago.
   logic [LaneWidth-1:0] cnt_lane_q;
-  always_ff @(posedge clk_i) cnt_lane_q <= LaneWidth'(cnt_cell_i % Lanes);
+  always_ff @(posedge clk_i) cnt_lane_q <= (Lanes > 1) ? LaneWidth'(cnt_cell_i) : '0;
   assign cnt_data_o = l_cnt[cnt_lane_q];
 
   // ------------------------------------------------------- control, merge
