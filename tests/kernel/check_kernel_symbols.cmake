@@ -1,6 +1,13 @@
 # Fails if the kernel archive references the allocator, exception machinery,
 # RTTI or iostreams. Run as: cmake -DNM=<nm> -DARCHIVE=<lib> -P this-file
-execute_process(COMMAND ${NM} -u ${ARCHIVE} OUTPUT_VARIABLE undefined RESULT_VARIABLE rc)
+# With -DWHOLE_PROGRAM=ON, ARCHIVE is a linked executable (the firmware ELF)
+# and every symbol in it is checked, defined or not: none of these may be
+# linked in at all.
+if(WHOLE_PROGRAM)
+  execute_process(COMMAND ${NM} ${ARCHIVE} OUTPUT_VARIABLE undefined RESULT_VARIABLE rc)
+else()
+  execute_process(COMMAND ${NM} -u ${ARCHIVE} OUTPUT_VARIABLE undefined RESULT_VARIABLE rc)
+endif()
 if(NOT rc EQUAL 0)
   message(FATAL_ERROR "${NM} failed on ${ARCHIVE}")
 endif()
@@ -16,7 +23,7 @@ set(forbidden
 string(REPLACE "\n" ";" lines "${undefined}")
 set(found "")
 foreach(line IN LISTS lines)
-  string(REGEX REPLACE "^.* U " "" sym "${line}")
+  string(REGEX REPLACE "^.* [A-Za-z] " "" sym "${line}")
   string(STRIP "${sym}" sym)
   foreach(bad IN LISTS forbidden)
     if(sym STREQUAL bad OR (sym MATCHES "^${bad}" AND bad MATCHES "^_Z|^__"))
@@ -28,4 +35,4 @@ if(found)
   list(REMOVE_DUPLICATES found)
   message(FATAL_ERROR "kernel references forbidden symbols: ${found}")
 endif()
-message(STATUS "kernel archive ${ARCHIVE}: no allocator, exception, RTTI, iostream or libm symbols")
+message(STATUS "${ARCHIVE}: no allocator, exception, RTTI, iostream or libm symbols")

@@ -13,5 +13,6 @@ int tables_export_hdl(const std::vector<std::string>& args);
 int synth(const std::vector<std::string>& args);
 int track(const std::vector<std::string>& args);
 int eval(const std::vector<std::string>& args);
+int vectors(const std::vector<std::string>& args);
 
 }  // namespace gabarit::cli

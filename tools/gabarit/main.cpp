@@ -25,6 +25,7 @@ constexpr const char* kUsage =
     "  synth            write a synthetic sequence with ground truth\n"
     "  track            track a model through a sequence\n"
     "  eval             compare tracked poses with ground truth\n"
+    "  vectors          write the cross-target test vectors (table, frames, expected results)\n"
     "  bench            re-measure the thesis's synthetic experiments (runs gabarit-bench)\n";
 
 // `gabarit bench` runs gabarit-bench from this executable's directory: the
@@ -66,6 +67,7 @@ int main(int argc, char** argv) {
     if (command == "synth") return gabarit::cli::synth(args);
     if (command == "track") return gabarit::cli::track(args);
     if (command == "eval") return gabarit::cli::eval(args);
+    if (command == "vectors") return gabarit::cli::vectors(args);
     throw gabarit::cli::UsageError("unknown command '" + command + "'");
   } catch (const gabarit::cli::UsageError& e) {
     std::fprintf(stderr, "gabarit %s: %s\n(see gabarit %s --help)\n", command.c_str(), e.what(),

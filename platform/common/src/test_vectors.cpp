@@ -1,0 +1,136 @@
+#include "gabarit/platform/test_vectors.hpp"
+
+#include <cstring>
+
+#include "gabarit/byte_order.hpp"
+#include "gabarit/crc32.hpp"
+
+namespace gabarit::vectors {
+namespace {
+
+template <class T>
+std::uint32_t float_bits(T value) noexcept {
+  std::uint32_t bits = 0;
+  static_assert(sizeof(T) == sizeof(bits));
+  std::memcpy(&bits, &value, sizeof(bits));
+  return bits;
+}
+
+// Field offsets in a record (see encode_record).
+struct Field {
+  const char* name;
+  std::size_t offset;
+  std::size_t size;
+};
+constexpr Field kFields[] = {
+    {"x", 0, 4},          {"y", 4, 4},           {"theta_deg", 8, 4},  {"depth", 12, 2},
+    {"state", 14, 1},     {"best_cell", 16, 4},  {"best_votes", 20, 2}, {"runner_up_votes", 22, 2},
+    {"runner_up_cell", 24, 4}, {"score", 28, 4}, {"roi_centre_x", 32, 4}, {"roi_centre_y", 36, 4},
+    {"features", 40, 4},  {"features_dropped", 44, 4}, {"votes", 48, 8},
+};
+
+std::uint64_t load_field(const std::byte* record, const Field& f) noexcept {
+  switch (f.size) {
+    case 1: return std::to_integer<std::uint64_t>(record[f.offset]);
+    case 2: return load_le<std::uint16_t>(record + f.offset);
+    case 4: return load_le<std::uint32_t>(record + f.offset);
+    default: return load_le<std::uint64_t>(record + f.offset);
+  }
+}
+
+}  // namespace
+
+Status open_vectors(std::span<const std::byte> bytes, VectorSet& out) noexcept {
+  if (bytes.size() < kHeaderBytes + kTrailerBytes) return Status::kTruncated;
+  if (std::memcmp(bytes.data(), kMagic, sizeof(kMagic)) != 0) return Status::kBadMagic;
+  const std::byte* p = bytes.data();
+  VectorSet set;
+  set.frame_count = load_le<std::uint32_t>(p + 8);
+  set.width = load_le<std::uint32_t>(p + 12);
+  set.height = load_le<std::uint32_t>(p + 16);
+  if (set.frame_count == 0 || set.frame_count > 100000 || set.width == 0 || set.width > 8192 || set.height == 0 ||
+      set.height > 8192) {
+    return Status::kBadHeaderField;
+  }
+  const std::uint8_t kind = std::to_integer<std::uint8_t>(p[20]);
+  if (kind > static_cast<std::uint8_t>(table_format::DetectorKind::kGradientRows)) return Status::kBadHeaderField;
+  set.detector.kind = static_cast<table_format::DetectorKind>(kind);
+  set.detector.threshold = load_le<std::uint16_t>(p + 22);
+  set.init.x = load_le<float>(p + 24);
+  set.init.y = load_le<float>(p + 28);
+  set.init.theta_deg = load_le<float>(p + 32);
+  set.init.depth = load_le<std::uint16_t>(p + 36);
+  const std::size_t size = file_bytes(set.frame_count, set.width, set.height);
+  if (bytes.size() < size) return Status::kTruncated;
+  if (bytes.size() != size) return Status::kSizeMismatch;
+  const std::size_t body = size - kTrailerBytes;
+  if (crc32(bytes.first(body)) != load_le<std::uint32_t>(p + body)) return Status::kBadChecksum;
+  const std::size_t pixels = std::size_t{set.frame_count} * set.width * set.height;
+  set.frames = bytes.subspan(kHeaderBytes, pixels);
+  set.expected = bytes.subspan(kHeaderBytes + pixels, std::size_t{set.frame_count} * kRecordBytes);
+  out = set;
+  return Status::kOk;
+}
+
+void encode_header(const VectorSet& set, std::span<std::byte, kHeaderBytes> out) noexcept {
+  std::byte* p = out.data();
+  std::memset(p, 0, kHeaderBytes);
+  std::memcpy(p, kMagic, sizeof(kMagic));
+  store_le<std::uint32_t>(p + 8, set.frame_count);
+  store_le<std::uint32_t>(p + 12, set.width);
+  store_le<std::uint32_t>(p + 16, set.height);
+  p[20] = static_cast<std::byte>(set.detector.kind);
+  store_le<std::uint16_t>(p + 22, set.detector.threshold);
+  store_le<float>(p + 24, set.init.x);
+  store_le<float>(p + 28, set.init.y);
+  store_le<float>(p + 32, set.init.theta_deg);
+  store_le<std::uint16_t>(p + 36, set.init.depth);
+}
+
+void encode_record(const StepResult& step, std::span<std::byte, kRecordBytes> out) noexcept {
+  std::byte* p = out.data();
+  std::memset(p, 0, kRecordBytes);
+  store_le<std::uint32_t>(p + 0, float_bits(step.pose.x));
+  store_le<std::uint32_t>(p + 4, float_bits(step.pose.y));
+  store_le<std::uint32_t>(p + 8, float_bits(step.pose.theta_deg));
+  store_le<std::uint16_t>(p + 12, step.pose.depth);
+  p[14] = static_cast<std::byte>(step.state);
+  store_le<std::uint32_t>(p + 16, step.best.cell);
+  store_le<std::uint16_t>(p + 20, step.best.votes);
+  store_le<std::uint16_t>(p + 22, step.runner_up.votes);
+  store_le<std::uint32_t>(p + 24, step.runner_up.cell);
+  store_le<std::uint32_t>(p + 28, float_bits(step.score));
+  store_le<std::int32_t>(p + 32, step.roi_centre_x);
+  store_le<std::int32_t>(p + 36, step.roi_centre_y);
+  store_le<std::uint32_t>(p + 40, step.features);
+  store_le<std::uint32_t>(p + 44, step.features_dropped);
+  store_le<std::uint64_t>(p + 48, step.votes);
+}
+
+Status check_vectors(const TableView& table, const VectorSet& set, TrackerScratch scratch, Report& report) noexcept {
+  report = Report{};
+  Pose pose = set.init;
+  for (std::uint32_t i = 0; i < set.frame_count; ++i) {
+    StepResult step;
+    GABARIT_TRY(track_step(table, set.detector, set.frame(i), pose, scratch, step));
+    std::byte actual[kRecordBytes];
+    encode_record(step, std::span<std::byte, kRecordBytes>(actual));
+    const std::byte* expected = set.expected.data() + std::size_t{i} * kRecordBytes;
+    for (const Field& f : kFields) {
+      const std::uint64_t want = load_field(expected, f), got = load_field(actual, f);
+      if (want != got) {
+        report.match = false;
+        report.frame = i;
+        report.field = f.name;
+        report.expected = want;
+        report.actual = got;
+        return Status::kOk;
+      }
+    }
+    report.frames_checked = i + 1;
+    pose = step.pose;
+  }
+  return Status::kOk;
+}
+
+}  // namespace gabarit::vectors

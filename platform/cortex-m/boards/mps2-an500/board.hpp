@@ -1,0 +1,9 @@
+// Arm MPS2 FPGA image AN500: Cortex-M7 (QEMU `-M mps2-an500`).
+#pragma once
+
+#include <cstdint>
+
+namespace gabarit::mcu::board {
+inline constexpr const char* kName = "mps2-an500 (Cortex-M7)";
+inline constexpr std::uintptr_t kUart0Base = 0x40004000;  // CMSDK APB UART0
+}  // namespace gabarit::mcu::board

@@ -1,0 +1,96 @@
+// The firmware's application: validate the table linked into flash once,
+// then replay the embedded test vectors through the kernel's tracker and
+// report whether every pose and vote count is bit-identical to the host's.
+// All buffers are static and sized by the kernel's constexpr functions for
+// the largest table this firmware accepts; a bigger table is refused at
+// start-up, never overrun.
+#include <cstddef>
+#include <cstdint>
+#include <span>
+
+#include "board.hpp"
+#include "console.hpp"
+#include "gabarit/platform/test_vectors.hpp"
+#include "gabarit/table_view.hpp"
+#include "gabarit/tracker.hpp"
+
+extern "C" {
+extern const std::byte gabarit_table[], gabarit_table_end[];
+extern const std::byte gabarit_vectors[], gabarit_vectors_end[];
+}
+
+namespace {
+
+using gabarit::mcu::Line;
+using gabarit::mcu::console_write;
+
+// The largest table the firmware's RAM is sized for: a ROI of up to
+// kMaxRoiSide x kMaxRoiSide pixels centred on the reference point, and up to
+// kMaxCells cells.
+constexpr std::uint16_t kMaxRoiSide = 192;
+constexpr std::int16_t kMaxRoiOrigin = -static_cast<std::int16_t>(kMaxRoiSide / 2);
+constexpr std::uint32_t kMaxCells = 4096;
+constexpr std::size_t kFeatureCapacity =
+    gabarit::tracker_feature_capacity(kMaxRoiSide, kMaxRoiSide, kMaxRoiOrigin, kMaxRoiOrigin);
+constexpr std::size_t kMaskBytes = gabarit::tracker_mask_bytes(kMaxRoiSide, kMaxRoiSide);
+
+gabarit::RoiPoint g_features[kFeatureCapacity];
+gabarit::VoteCounter g_counters[gabarit::voter_counter_count(kMaxCells)];
+std::uint8_t g_roi_mask[kMaskBytes];
+
+std::span<const std::byte> between(const std::byte* begin, const std::byte* end) {
+  return {begin, static_cast<std::size_t>(end - begin)};
+}
+
+int fail(const char* what, gabarit::Status status) {
+  Line line;
+  console_write(line.text("FAIL: ").text(what).text(": ").text(gabarit::status_name(status)));
+  return 1;
+}
+
+}  // namespace
+
+extern "C" int app_main() {
+  Line hello;
+  console_write(hello.text("gabarit firmware on ").text(gabarit::mcu::board::kName));
+
+  gabarit::TableView table;
+  if (const auto s = gabarit::TableView::open(between(gabarit_table, gabarit_table_end), table); s != gabarit::Status::kOk)
+    return fail("table", s);
+  // The table's needs against this firmware's static buffers: checked once here.
+  const std::size_t features_needed = gabarit::tracker_feature_capacity(table);
+  if (features_needed > kFeatureCapacity || table.cell_count() > kMaxCells ||
+      gabarit::tracker_mask_bytes(table) > kMaskBytes) {
+    Line line;
+    console_write(line.text("FAIL: table needs ").dec(std::uint64_t{features_needed}).text(" feature slots and ")
+                      .dec(std::uint64_t{table.cell_count()}).text(" cells; this firmware has ")
+                      .dec(std::uint64_t{kFeatureCapacity}).text(" and ").dec(std::uint64_t{kMaxCells}));
+    return 1;
+  }
+  Line info;
+  console_write(info.text("table: ").dec(std::uint64_t{table.cell_count()}).text(" cells, ")
+                    .dec(std::uint64_t{table.reference_count()}).text(" references, ")
+                    .dec(static_cast<std::uint64_t>(gabarit_table_end - gabarit_table)).text(" bytes in flash"));
+
+  gabarit::vectors::VectorSet set;
+  if (const auto s = gabarit::vectors::open_vectors(between(gabarit_vectors, gabarit_vectors_end), set); s != gabarit::Status::kOk)
+    return fail("vectors", s);
+
+  gabarit::TrackerScratch scratch;
+  scratch.features = g_features;
+  scratch.counters = std::span<gabarit::VoteCounter>(g_counters, gabarit::voter_counter_count(table.cell_count()));
+  scratch.roi_mask = g_roi_mask;
+  gabarit::vectors::Report report;
+  if (const auto s = gabarit::vectors::check_vectors(table, set, scratch, report); s != gabarit::Status::kOk)
+    return fail("track_step", s);
+  Line result;
+  if (!report.match) {
+    console_write(result.text("FAIL: frame ").dec(std::uint64_t{report.frame}).text(" field ").text(report.field)
+                      .text(": expected ").hex(report.expected).text(", got ").hex(report.actual));
+    return 1;
+  }
+  console_write(result.text("PASS: ").dec(std::uint64_t{report.frames_checked}).text(" frames ")
+                    .dec(std::uint64_t{set.width}).text("x").dec(std::uint64_t{set.height})
+                    .text(", poses and votes bit-identical to the host"));
+  return 0;
+}

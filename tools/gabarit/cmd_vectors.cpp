@@ -1,0 +1,40 @@
+// gabarit vectors
+#include <cstdio>
+
+#include "args.hpp"
+#include "commands.hpp"
+#include "gabarit/host/test_vector_scene.hpp"
+
+namespace gabarit::cli {
+
+int vectors(const std::vector<std::string>& argv) {
+  Args args("vectors", "--out DIR [options]",
+            "Writes the cross-target test vectors: DIR/table.gbt (a 4-DOF table: x, y +-6 px in 2-px cells,\n"
+            "theta +-3 deg in 2-deg cells, every focus-stack depth) and DIR/vectors.gbv (frames plus the host's\n"
+            "tracking results, docs/file-formats.md). Every target replays them and must match bit for bit.\n"
+            "Same options, same bytes.",
+            {{"--out", "DIR", "output directory", false, true},
+             {"--points", "N", "approximate model feature count at depth 0, 100..5000 (default 1000)"},
+             {"--depths", "N", "focus-stack depths, 1..16 (default 4)"},
+             {"--frames", "N", "frames, 1..1000 (default 8)"},
+             {"--keep", "RATIO", "fraction of stencil references kept, (0,1] (default 0.2)"},
+             {"--noise", "P", "salt-and-pepper rate in [0,1] (default 0.02)"},
+             {"--seed", "S", "seed (default 1)"}});
+  if (!args.parse(argv)) return 0;
+  host::VectorSceneOptions o;
+  o.model_points = static_cast<std::uint32_t>(args.integer("--points", o.model_points, 100, 5000));
+  o.depths = static_cast<std::uint16_t>(args.integer("--depths", o.depths, 1, 16));
+  o.frames = static_cast<std::uint32_t>(args.integer("--frames", o.frames, 1, 1000));
+  o.keep = args.number("--keep", o.keep, 1e-6, 1.0);
+  o.noise = args.number("--noise", o.noise, 0.0, 1.0);
+  o.seed = static_cast<std::uint64_t>(args.integer("--seed", 1, 0, INT64_MAX));
+  const auto s = host::write_test_vectors(o, args.get("--out"));
+  std::fprintf(stderr,
+               "%s: %zu-point model x %u depths, %u cells, table %zu bytes; %u frames %ux%u, vectors %zu bytes; "
+               "%u/%u frames on the true pose\n",
+               args.get("--out").c_str(), s.model_points, o.depths, s.cells, s.table_bytes, o.frames, s.width, s.height,
+               s.vector_bytes, s.frames_on_truth, o.frames);
+  return 0;
+}
+
+}  // namespace gabarit::cli

@@ -1,0 +1,153 @@
+#include "gabarit/host/test_vector_scene.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <set>
+#include <vector>
+
+#include "gabarit/byte_order.hpp"
+#include "gabarit/crc32.hpp"
+#include "gabarit/deterministic_math.hpp"
+#include "gabarit/host/error.hpp"
+#include "gabarit/host/image_io.hpp"
+#include "gabarit/host/rng.hpp"
+#include "gabarit/host/synth.hpp"
+#include "gabarit/host/table_builder.hpp"
+#include "gabarit/host/tracking_run.hpp"
+#include "gabarit/platform/test_vectors.hpp"
+
+namespace gabarit::host {
+namespace {
+
+// Three nested closed curves (about half, a third and a sixth of the points)
+// around the reference point: a compact ~1000-point object, radius ~45 px.
+std::vector<Point> nested_curves(std::uint32_t points, std::uint64_t seed) {
+  std::set<Point> all;
+  const double shares[3] = {0.5, 0.33, 0.17};
+  for (int i = 0; i < 3; ++i) {
+    const auto n = std::max<std::size_t>(8, static_cast<std::size_t>(points * shares[i]));
+    for (const Point& p : random_closed_curve(n, seed * 7 + static_cast<std::uint64_t>(i))) all.insert(p);
+  }
+  return {all.begin(), all.end()};
+}
+
+// Depth n of the focus stack: the model scaled by 1 + 0.04 n, so no two
+// depths have the same features.
+std::vector<Point> at_depth(const std::vector<Point>& base, std::uint16_t n) {
+  const float s = 1.0f + 0.04f * static_cast<float>(n);
+  std::set<Point> out;
+  for (const Point& p : base) out.insert({round_to_int(s * static_cast<float>(p.x)), round_to_int(s * static_cast<float>(p.y))});
+  return {out.begin(), out.end()};
+}
+
+void write_file(const std::filesystem::path& path, const std::vector<std::byte>& bytes) {
+  std::ofstream out(path, std::ios::binary);
+  out.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+  if (!out.flush()) throw Error("cannot write " + path.string());
+}
+
+}  // namespace
+
+VectorSceneSummary write_test_vectors(const VectorSceneOptions& o, const std::string& dir) {
+  if (o.model_points < 100 || o.model_points > 5000) throw Error("vectors: model points must be in 100..5000");
+  if (o.depths < 1 || o.depths > 16) throw Error("vectors: depths must be in 1..16");
+  if (o.frames < 1 || o.frames > 1000) throw Error("vectors: frames must be in 1..1000");
+  if (!(o.keep > 0 && o.keep <= 1)) throw Error("vectors: keep must be in (0, 1]");
+  if (!(o.noise >= 0 && o.noise <= 1)) throw Error("vectors: noise must be in [0, 1]");
+
+  ModelStack model;
+  const std::vector<Point> base = nested_curves(o.model_points, o.seed);
+  for (std::uint16_t n = 0; n < o.depths; ++n) model.depths.push_back(at_depth(base, n));
+  model.detector.kind = table_format::DetectorKind::kBinary;
+
+  // +-7 px in 2-px cells, +-3 deg in 2-deg cells, every depth: per frame the
+  // object may move anywhere in that window.
+  BuildOptions build;
+  build.space.x = {-6.0f, 6.0f, 7};
+  build.space.y = {-6.0f, 6.0f, 7};
+  build.space.theta = {-2.0f, 2.0f, 3};
+  build.keep = o.keep;
+  build.seed = o.seed;
+  const std::vector<std::byte> table_bytes = build_table(model, build);
+  TableView table;
+  if (const Status s = TableView::open(table_bytes, table); s != Status::kOk) throw Error(std::string("vectors: built table invalid: ") + status_name(s));
+
+  std::int32_t extent = 0;
+  for (const auto& depth : model.depths)
+    for (const Point& p : depth) extent = std::max({extent, std::abs(p.x), std::abs(p.y)});
+  const std::uint32_t side = static_cast<std::uint32_t>(2 * (extent + 24) + 1);
+
+  // The true trajectory: integer steps within the table's cell centres'
+  // reach, angle steps of whole degrees, depth walking by one.
+  Rng rng(o.seed ^ 0x7EC7025ull);
+  float x = static_cast<float>(side / 2), y = static_cast<float>(side / 2), theta = 0;
+  std::int32_t depth = static_cast<std::int32_t>(o.depths / 2);
+  vectors::VectorSet set;
+  set.frame_count = o.frames;
+  set.width = side;
+  set.height = side;
+  set.detector = {table_format::DetectorKind::kBinary, 0};
+  set.init = {x, y, theta, static_cast<std::uint16_t>(depth)};
+
+  std::vector<std::byte> file(vectors::file_bytes(o.frames, side, side));
+  std::vector<float> true_x, true_y, true_theta;
+  std::vector<std::int32_t> true_depth;
+  for (std::uint32_t f = 0; f < o.frames; ++f) {
+    x += static_cast<float>(rng.uniform_int(-5, 5));
+    y += static_cast<float>(rng.uniform_int(-5, 5));
+    theta += static_cast<float>(rng.uniform_int(-2, 2));
+    depth = std::clamp(depth + rng.uniform_int(-1, 1), 0, static_cast<std::int32_t>(o.depths) - 1);
+    GrayImage image(side, side, 0);
+    const SinCos sc = sin_cos_deg(theta);
+    for (const Point& m : model.depths[static_cast<std::size_t>(depth)]) {
+      const std::int32_t px = round_to_int(x + sc.cos * static_cast<float>(m.x) - sc.sin * static_cast<float>(m.y));
+      const std::int32_t py = round_to_int(y + sc.sin * static_cast<float>(m.x) + sc.cos * static_cast<float>(m.y));
+      if (px >= 0 && py >= 0 && px < static_cast<std::int32_t>(side) && py < static_cast<std::int32_t>(side))
+        image.at(static_cast<std::uint32_t>(px), static_cast<std::uint32_t>(py)) = 255;
+    }
+    for (auto& v : image.pixels)
+      if (rng.bernoulli(o.noise)) v = static_cast<std::uint8_t>(255 - v);
+    std::copy_n(reinterpret_cast<const std::byte*>(image.pixels.data()), image.pixels.size(),
+                file.begin() + static_cast<std::ptrdiff_t>(vectors::kHeaderBytes + std::size_t{f} * side * side));
+    true_x.push_back(x);
+    true_y.push_back(y);
+    true_theta.push_back(theta);
+    true_depth.push_back(depth);
+  }
+
+  // The host's results, closed loop, as every target will replay them.
+  VectorSceneSummary summary;
+  TrackerBuffers buffers(table, VoterChoice::kCsr);
+  Pose pose = set.init;
+  const std::size_t records_at = vectors::kHeaderBytes + std::size_t{o.frames} * side * side;
+  for (std::uint32_t f = 0; f < o.frames; ++f) {
+    const ImageView view{reinterpret_cast<const std::uint8_t*>(file.data()) + vectors::kHeaderBytes + std::size_t{f} * side * side,
+                         side, side, side};
+    StepResult step;
+    if (const Status s = track_step(table, set.detector, view, pose, buffers.scratch(), step); s != Status::kOk)
+      throw Error(std::string("vectors: track_step failed: ") + status_name(s));
+    vectors::encode_record(step, std::span<std::byte, vectors::kRecordBytes>(file.data() + records_at + std::size_t{f} * vectors::kRecordBytes,
+                                                                             vectors::kRecordBytes));
+    if (std::abs(step.pose.x - true_x[f]) <= 1.5f && std::abs(step.pose.y - true_y[f]) <= 1.5f &&
+        std::abs(step.pose.theta_deg - true_theta[f]) <= 1.5f && step.pose.depth == true_depth[f])
+      ++summary.frames_on_truth;
+    pose = step.pose;
+  }
+  vectors::encode_header(set, std::span<std::byte, vectors::kHeaderBytes>(file.data(), vectors::kHeaderBytes));
+  const std::size_t body = file.size() - vectors::kTrailerBytes;
+  store_le<std::uint32_t>(file.data() + body, crc32(std::span<const std::byte>(file.data(), body)));
+
+  std::filesystem::create_directories(dir);
+  write_file(std::filesystem::path(dir) / "table.gbt", table_bytes);
+  write_file(std::filesystem::path(dir) / "vectors.gbv", file);
+  summary.model_points = model.depths[0].size();
+  summary.table_bytes = table_bytes.size();
+  summary.vector_bytes = file.size();
+  summary.cells = table.cell_count();
+  summary.width = summary.height = side;
+  return summary;
+}
+
+}  // namespace gabarit::host
