@@ -1,6 +1,8 @@
 // Reset and exception entry for the Cortex-M boards: the vector table, the
 // C++ runtime set-up a hosted program gets from crt0 (.data copied from
-// flash, .bss zeroed, the FPU enabled, static constructors run), then the application's app_main.
+// flash, .bss zeroed, the FPU enabled), then the application's app_main.
+// There are no static constructors to run: firmware.ld refuses to link any,
+// so start-up has no indirect calls and the stack report sees every call.
 // A fault reports itself on the console and ends the run with a failure.
 #include <cstdint>
 
@@ -9,8 +11,6 @@
 
 extern "C" {
 extern std::uint32_t __data_start[], __data_end[], __data_load[], __bss_start[], __bss_end[], __stack_top[];
-extern void (*__init_array_start[])();
-extern void (*__init_array_end[])();
 int app_main();  // the application (ISO C++ forbids calling main)
 [[noreturn]] void Reset_Handler();
 [[noreturn]] void Fault_Handler();
@@ -40,7 +40,6 @@ using Handler = void (*)();
   enable_fpu();
   for (std::uint32_t *src = __data_load, *dst = __data_start; dst < __data_end;) *dst++ = *src++;
   for (std::uint32_t* dst = __bss_start; dst < __bss_end;) *dst++ = 0;
-  for (auto* ctor = __init_array_start; ctor < __init_array_end; ++ctor) (*ctor)();
   gabarit::mcu::semihost_exit(static_cast<std::uint32_t>(app_main()));
 }
 

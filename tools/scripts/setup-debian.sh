@@ -5,7 +5,7 @@ set -euo pipefail
 packages=(
   build-essential cmake ninja-build git python3
   googletest libgtest-dev
-  g++-aarch64-linux-gnu qemu-user
+  g++-aarch64-linux-gnu g++-arm-linux-gnueabihf qemu-user qemu-system-arm
   gcc-arm-none-eabi libnewlib-arm-none-eabi libstdc++-arm-none-eabi-newlib
   libopencv-imgproc-dev   # gabarit bench's peer (matchTemplate); never linked into the tracker
   python3-skimage netpbm  # the real photograph behind the 'watch' shape, converted at run time

@@ -2,15 +2,18 @@
 # The whole test suite — the README's test command and what CI runs:
 #   1. host, Debug + AddressSanitizer + UBSan (every test, the CLI end to end)
 #   2. host, Release (again, plus the no-heap proof, which replaces malloc)
-#   3. aarch64-linux-gnu cross build, every test under qemu-aarch64
-#   4. arm-none-eabi Cortex-M7 kernel build and its forbidden-symbol check
+#      It also writes the cross-target test vectors (build/release/vectors)
+#      that the presets below replay, so it runs before them.
+#   3. aarch64-linux-gnu and arm-linux-gnueabihf cross builds, every test under qemu-user
+#   4. arm-none-eabi Cortex-M7 and Cortex-M55 firmware, run on QEMU's MPS2/MPS3
+#      boards, with the symbol, stack and memory checks
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 bash tools/scripts/setup-debian.sh
 logs=$(mktemp -d)
 trap 'rm -rf "$logs"' EXIT
 status=0 passed=0 failed=0
-for preset in dev release aarch64 cortex-m7; do
+for preset in dev release aarch64 armhf cortex-m7 cortex-m55; do
   echo "=== $preset ==="
   start=$SECONDS
   if cmake --workflow --preset "$preset" --fresh 2>&1 | tee "$logs/$preset.log"; then

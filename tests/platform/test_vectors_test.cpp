@@ -1,0 +1,114 @@
+// The cross-target test vectors: reproducible, replayed exactly on the host,
+// and a replay that differs in any field is reported with its frame and field.
+#include "gabarit/platform/test_vectors.hpp"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <vector>
+
+#include "gabarit/byte_order.hpp"
+#include "gabarit/crc32.hpp"
+#include "gabarit/host/test_vector_scene.hpp"
+#include "gabarit/host/tracking_run.hpp"
+
+namespace gabarit {
+namespace {
+
+std::vector<std::byte> read_bytes(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::vector<char> chars((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  std::vector<std::byte> out(chars.size());
+  std::memcpy(out.data(), chars.data(), chars.size());
+  return out;
+}
+
+void reseal(std::vector<std::byte>& file) {
+  const std::size_t body = file.size() - vectors::kTrailerBytes;
+  store_le<std::uint32_t>(file.data() + body, crc32(std::span<const std::byte>(file.data(), body)));
+}
+
+class TestVectors : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = std::filesystem::temp_directory_path() / ("gabarit-vectors-test-" + std::to_string(::getpid()));
+    host::VectorSceneOptions o;
+    o.model_points = 300;
+    o.depths = 2;
+    o.frames = 4;
+    o.keep = 0.5;
+    host::write_test_vectors(o, (dir_ / "a").string());
+    host::write_test_vectors(o, (dir_ / "b").string());
+  }
+  static void TearDownTestSuite() { std::filesystem::remove_all(dir_); }
+
+  // Replays `file` on the host against table a/table.gbt.
+  static Status replay(const std::vector<std::byte>& file, vectors::Report& report) {
+    const std::vector<std::byte> table_bytes = read_bytes(dir_ / "a" / "table.gbt");
+    std::vector<std::uint64_t> aligned((table_bytes.size() + 7) / 8);
+    std::memcpy(aligned.data(), table_bytes.data(), table_bytes.size());
+    TableView table;
+    EXPECT_EQ(TableView::open({reinterpret_cast<const std::byte*>(aligned.data()), table_bytes.size()}, table), Status::kOk);
+    vectors::VectorSet set;
+    GABARIT_TRY(vectors::open_vectors(file, set));
+    host::TrackerBuffers buffers(table, host::VoterChoice::kCsr);
+    return vectors::check_vectors(table, set, buffers.scratch(), report);
+  }
+
+  static inline std::filesystem::path dir_;
+};
+
+TEST_F(TestVectors, SameOptionsWriteTheSameBytes) {
+  EXPECT_EQ(read_bytes(dir_ / "a" / "table.gbt"), read_bytes(dir_ / "b" / "table.gbt"));
+  EXPECT_EQ(read_bytes(dir_ / "a" / "vectors.gbv"), read_bytes(dir_ / "b" / "vectors.gbv"));
+}
+
+TEST_F(TestVectors, TheHostReplaysItsOwnVectorsExactly) {
+  vectors::Report report;
+  ASSERT_EQ(replay(read_bytes(dir_ / "a" / "vectors.gbv"), report), Status::kOk);
+  EXPECT_TRUE(report.match) << "frame " << report.frame << " field " << report.field;
+  EXPECT_EQ(report.frames_checked, 4u);
+}
+
+TEST_F(TestVectors, ADifferentResultIsReportedWithFrameAndField) {
+  std::vector<std::byte> file = read_bytes(dir_ / "a" / "vectors.gbv");
+  vectors::VectorSet set;
+  ASSERT_EQ(vectors::open_vectors(file, set), Status::kOk);
+  // Frame 2's best-cell vote count (record offset 20), one more than the host saw.
+  const std::size_t at = static_cast<std::size_t>(set.expected.data() - file.data()) + 2 * vectors::kRecordBytes + 20;
+  store_le<std::uint16_t>(file.data() + at, static_cast<std::uint16_t>(load_le<std::uint16_t>(file.data() + at) + 1));
+  reseal(file);
+  vectors::Report report;
+  ASSERT_EQ(replay(file, report), Status::kOk);
+  EXPECT_FALSE(report.match);
+  EXPECT_EQ(report.frame, 2u);
+  EXPECT_STREQ(report.field, "best_votes");
+  EXPECT_EQ(report.expected, report.actual + 1);
+  EXPECT_EQ(report.frames_checked, 2u);
+}
+
+TEST_F(TestVectors, DamagedFilesAreRefused) {
+  const std::vector<std::byte> good = read_bytes(dir_ / "a" / "vectors.gbv");
+  vectors::VectorSet set;
+  auto flipped = good;
+  flipped[vectors::kHeaderBytes + 100] ^= std::byte{0x01};  // one frame pixel
+  EXPECT_EQ(vectors::open_vectors(flipped, set), Status::kBadChecksum);
+  EXPECT_EQ(vectors::open_vectors(std::span(good).first(good.size() - 1), set), Status::kTruncated);
+  EXPECT_EQ(vectors::open_vectors(std::span(good).first(10), set), Status::kTruncated);
+  auto longer = good;
+  longer.push_back(std::byte{0});
+  EXPECT_EQ(vectors::open_vectors(longer, set), Status::kSizeMismatch);
+  auto magic = good;
+  magic[0] = std::byte{'X'};
+  EXPECT_EQ(vectors::open_vectors(magic, set), Status::kBadMagic);
+  auto zero_frames = good;
+  store_le<std::uint32_t>(zero_frames.data() + 8, 0);
+  EXPECT_EQ(vectors::open_vectors(zero_frames, set), Status::kBadHeaderField);
+}
+
+}  // namespace
+}  // namespace gabarit
