@@ -101,7 +101,9 @@ std::int64_t Args::integer(const std::string& name, std::int64_t fallback, std::
 
 std::string Args::help() const {
   std::ostringstream o;
-  o << "usage: gabarit " << command_ << " " << synopsis_ << "\n\n" << description_ << "\n\noptions:\n";
+  // A subcommand ("track") or a program of its own ("gabarit-board").
+  const std::string program = command_.rfind("gabarit", 0) == 0 ? command_ : "gabarit " + command_;
+  o << "usage: " << program << " " << synopsis_ << "\n\n" << description_ << "\n\noptions:\n";
   for (const Option& opt : options_) {
     std::string left = "  " + opt.name + (opt.value_name.empty() ? "" : " " + opt.value_name);
     if (left.size() < 26) left.resize(26, ' ');
@@ -127,6 +129,27 @@ std::vector<double> parse_number_list(const std::string& text, const std::string
     throw UsageError(what + " '" + text + "': want " + std::to_string(min_count) + " to " + std::to_string(max_count) + " comma-separated numbers");
   }
   return out;
+}
+
+Pose parse_init_pose(const std::string& text, const TableView& table, const std::string& what) {
+  const auto init = parse_number_list(text, what, 2, 4);
+  for (std::size_t i = 0; i < init.size() && i < 3; ++i)
+    if (std::fabs(init[i]) > 1e5) throw UsageError(what + ": values must lie within +-100000");
+  Pose pose{static_cast<float>(init[0]), static_cast<float>(init[1]), init.size() > 2 ? static_cast<float>(init[2]) : 0.0f, 0};
+  if (init.size() > 3) {
+    if (init[3] < 0 || init[3] >= table.depth_count() || init[3] != std::floor(init[3])) {
+      throw UsageError(what + ": DEPTH must be an integer in 0.." + std::to_string(table.depth_count() - 1));
+    }
+    pose.depth = static_cast<std::uint16_t>(init[3]);
+  }
+  return pose;
+}
+
+host::VoterChoice parse_voter(const std::string& text, const std::string& what) {
+  if (text == "auto") return host::VoterChoice::kAuto;
+  if (text == "csr") return host::VoterChoice::kCsr;
+  if (text == "dense") return host::VoterChoice::kDense;
+  throw UsageError(what + " '" + text + "': want auto, csr or dense");
 }
 
 }  // namespace gabarit::cli

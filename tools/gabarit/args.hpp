@@ -9,6 +9,9 @@
 #include <vector>
 
 #include "gabarit/host/error.hpp"
+#include "gabarit/host/tracking_run.hpp"
+#include "gabarit/table_view.hpp"
+#include "gabarit/tracker.hpp"
 
 namespace gabarit::cli {
 
@@ -55,5 +58,12 @@ class Args {
 // Parses "A,B" or "A,B,C[,D]" into numbers; throws UsageError naming `what`.
 std::vector<double> parse_number_list(const std::string& text, const std::string& what, std::size_t min_count,
                                       std::size_t max_count);
+
+// "X,Y[,THETA[,DEPTH]]": the pose before the first frame; DEPTH must be one
+// of the table's depths. Throws UsageError naming `what`.
+Pose parse_init_pose(const std::string& text, const TableView& table, const std::string& what);
+
+// "auto", "csr" or "dense". Throws UsageError naming `what`.
+host::VoterChoice parse_voter(const std::string& text, const std::string& what);
 
 }  // namespace gabarit::cli

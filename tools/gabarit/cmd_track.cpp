@@ -32,25 +32,8 @@ int track(const std::vector<std::string>& argv) {
   if (const Status s = TableView::open(file.bytes(), table); s != Status::kOk) {
     throw host::Error(args.get("--table") + ": not a valid table: " + status_name(s));
   }
-  const auto init = parse_number_list(args.get("--init"), "--init", 2, 4);
-  Pose pose{static_cast<float>(init[0]), static_cast<float>(init[1]), init.size() > 2 ? static_cast<float>(init[2]) : 0.0f, 0};
-  if (std::fabs(init[0]) > 1e5 || std::fabs(init[1]) > 1e5 || (init.size() > 2 && std::fabs(init[2]) > 1e5)) {
-    throw UsageError("--init: values must lie within +-100000");
-  }
-  if (init.size() > 3) {
-    if (init[3] < 0 || init[3] >= table.depth_count() || init[3] != std::floor(init[3])) {
-      throw UsageError("--init: DEPTH must be an integer in 0.." + std::to_string(table.depth_count() - 1));
-    }
-    pose.depth = static_cast<std::uint16_t>(init[3]);
-  }
-  host::VoterChoice voter = host::VoterChoice::kAuto;
-  if (const std::string v = args.get_or("--voter", "auto"); v == "csr") {
-    voter = host::VoterChoice::kCsr;
-  } else if (v == "dense") {
-    voter = host::VoterChoice::kDense;
-  } else if (v != "auto") {
-    throw UsageError("--voter '" + v + "': want auto, csr or dense");
-  }
+  const Pose pose = parse_init_pose(args.get("--init"), table, "--init");
+  const host::VoterChoice voter = parse_voter(args.get_or("--voter", "auto"), "--voter");
   std::optional<Detector> detector;
   if (args.has("--binary")) detector = Detector{table_format::DetectorKind::kBinary, 0};
 

@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
-#include <fstream>
 #include <set>
 #include <vector>
 
@@ -12,6 +11,7 @@
 #include "gabarit/deterministic_math.hpp"
 #include "gabarit/host/error.hpp"
 #include "gabarit/host/image_io.hpp"
+#include "gabarit/host/mapped_file.hpp"
 #include "gabarit/host/rng.hpp"
 #include "gabarit/host/synth.hpp"
 #include "gabarit/host/table_builder.hpp"
@@ -40,12 +40,6 @@ std::vector<Point> at_depth(const std::vector<Point>& base, std::uint16_t n) {
   std::set<Point> out;
   for (const Point& p : base) out.insert({round_to_int(s * static_cast<float>(p.x)), round_to_int(s * static_cast<float>(p.y))});
   return {out.begin(), out.end()};
-}
-
-void write_file(const std::filesystem::path& path, const std::vector<std::byte>& bytes) {
-  std::ofstream out(path, std::ios::binary);
-  out.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
-  if (!out.flush()) throw Error("cannot write " + path.string());
 }
 
 }  // namespace
@@ -140,8 +134,8 @@ VectorSceneSummary write_test_vectors(const VectorSceneOptions& o, const std::st
   store_le<std::uint32_t>(file.data() + body, crc32(std::span<const std::byte>(file.data(), body)));
 
   std::filesystem::create_directories(dir);
-  write_file(std::filesystem::path(dir) / "table.gbt", table_bytes);
-  write_file(std::filesystem::path(dir) / "vectors.gbv", file);
+  write_file((std::filesystem::path(dir) / "table.gbt").string(), table_bytes);
+  write_file((std::filesystem::path(dir) / "vectors.gbv").string(), file);
   summary.model_points = model.depths[0].size();
   summary.table_bytes = table_bytes.size();
   summary.vector_bytes = file.size();
