@@ -10,10 +10,14 @@ packages=(
   libopencv-imgproc-dev   # gabarit bench's peer (matchTemplate); never linked into the tracker
   python3-skimage netpbm  # the real photograph behind the 'watch' shape, converted at run time
   verilator zlib1g-dev    # hardware voter co-simulation (FST waveforms need zlib)
+  libgpiod-dev            # the board application's GPIO lines (libgpiod 1.6, the v1 API)
   yosys nextpnr-ice40 fpga-icestorm  # hardware voter synthesis and place-and-route
 )
+# The board application's libgpiod for the cross targets, from Debian's
+# multi-arch packages.
+cross_packages=(libgpiod-dev:arm64 libgpiod-dev:armhf)
 missing=()
-for p in "${packages[@]}"; do
+for p in "${packages[@]}" "${cross_packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
 done
 if [ ${#missing[@]} -eq 0 ]; then
@@ -23,5 +27,13 @@ fi
 sudo=""
 [ "$(id -u)" = 0 ] || sudo="sudo"
 echo "setup: installing ${missing[*]}"
-$sudo apt-get -o DPkg::Lock::Timeout=600 update -q
+for arch in arm64 armhf; do
+  dpkg --print-foreign-architectures | grep -qx "$arch" || $sudo dpkg --add-architecture "$arch"
+done
+# A mirror mid-sync can fail one index; retry, then go on with what arrived
+# (the install below fails clearly if a package is really unavailable).
+for attempt in 1 2 3; do
+  $sudo apt-get -o DPkg::Lock::Timeout=600 update -q && break
+  echo "setup: apt-get update failed (attempt $attempt)"; sleep 5
+done
 DEBIAN_FRONTEND=noninteractive $sudo apt-get -o DPkg::Lock::Timeout=600 install -y -q --no-install-recommends "${missing[@]}"
