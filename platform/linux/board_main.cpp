@@ -20,6 +20,7 @@
 
 #include "args.hpp"
 #include "frame_counter.hpp"
+#include "gabarit/crc32.hpp"
 #include "gabarit/host/mapped_file.hpp"
 #include "gabarit/host/tracking_run.hpp"
 #include "gpio_lines.hpp"
@@ -45,7 +46,9 @@ struct Config {
   host::VoterChoice voter = host::VoterChoice::kAuto;
   std::uint64_t max_frames = 0;        // 0: until stopped
   int frame_timeout_ms = 2000;         // report a stall after this long without a frame
+  int reopen_min_ms = 250;             // first wait after losing the device (lets an unplug settle)
   int reopen_max_ms = 2000;            // back-off ceiling between reopen attempts
+  bool frame_crc = false;
   bool quiet = false;
 };
 
@@ -73,6 +76,7 @@ Config parse(int argc, char** argv, bool& help_shown) {
        {"--voter", "auto|csr|dense", "voting method; results are identical (default auto)"},
        {"--frames", "N", "stop after N tracked frames (default: run until signalled)"},
        {"--frame-timeout-ms", "MS", "report a stall after MS without a frame (default 2000)"},
+       {"--reopen-min-ms", "MS", "wait after losing the device before reopening it; doubles per failed attempt (default 250)"},
        {"--reopen-max-ms", "MS", "longest wait between attempts to reopen a lost device (default 2000)"},
        {"--udp", "HOST:PORT", "also send each pose line as a UDP datagram"},
        {"--gpio-chip", "CHIP", "GPIO chip for the lines below (gpiochipN, /dev/gpiochipN or a label)"},
@@ -81,6 +85,8 @@ Config parse(int argc, char** argv, bool& help_shown) {
        {"--strobe-us", "US", "strobe pulse width in microseconds (default 100)"},
        {"--trigger-line", "N", "input: each rising edge starts or stops tracking"},
        {"--start-stopped", "", "with --trigger-line: wait for the first edge before tracking"},
+       {"--frame-crc", "", "append the CRC-32 of each tracked frame's luma (width x height bytes, row by row):\n"
+        "                          which frame was tracked, for tests that replay a recording through a camera"},
        {"--quiet", "", "no progress lines on stderr"}});
   std::vector<std::string> list(argv + 1, argv + argc);
   help_shown = !args.parse(list);
@@ -102,7 +108,9 @@ Config parse(int argc, char** argv, bool& help_shown) {
   c.voter = cli::parse_voter(args.get_or("--voter", "auto"), "--voter");
   c.max_frames = static_cast<std::uint64_t>(args.integer("--frames", 0, 0, INT64_MAX));
   c.frame_timeout_ms = static_cast<int>(args.integer("--frame-timeout-ms", 2000, 10, 3600000));
-  c.reopen_max_ms = static_cast<int>(args.integer("--reopen-max-ms", 2000, 10, 600000));
+  c.reopen_min_ms = static_cast<int>(args.integer("--reopen-min-ms", 250, 1, 600000));
+  c.reopen_max_ms = static_cast<int>(args.integer("--reopen-max-ms", 2000, 1, 600000));
+  if (c.reopen_max_ms < c.reopen_min_ms) throw cli::UsageError("--reopen-max-ms is smaller than --reopen-min-ms");
   c.udp = args.get_or("--udp", "");
   c.gpio.chip = args.get_or("--gpio-chip", "");
   c.gpio.lock_line = static_cast<int>(args.integer("--lock-line", -1, 0, 65535));
@@ -114,8 +122,16 @@ Config parse(int argc, char** argv, bool& help_shown) {
   if (!c.gpio.chip.empty() && !any_line) throw cli::UsageError("--gpio-chip given without any line");
   c.start_stopped = args.has("--start-stopped");
   if (c.start_stopped && c.gpio.trigger_line < 0) throw cli::UsageError("--start-stopped needs --trigger-line");
+  c.frame_crc = args.has("--frame-crc");
   c.quiet = args.has("--quiet");
   return c;
+}
+
+std::uint32_t luma_crc32(const ImageView& image) {
+  std::uint32_t crc = 0;
+  for (std::uint32_t y = 0; y < image.height; ++y)
+    crc = crc32_update(crc, {reinterpret_cast<const std::byte*>(image.pixels + std::size_t{y} * image.stride), image.width});
+  return crc;
 }
 
 class Board {
@@ -129,8 +145,7 @@ class Board {
   int run() {
     if (!gpio_.open(c_.gpio, "gabarit-board")) return fail("GPIO: " + gpio_.error());
     if (!c_.udp.empty() && !udp_.open(c_.udp)) return fail(udp_.error());
-    std::printf("%s\n", kPoseHeader);
-    int backoff_ms = 50;
+    std::printf("%s%s\n", kPoseHeader, c_.frame_crc ? ",luma_crc32" : "");
     bool reported_open_failure = false;
     while (!stop_) {
       if (!capture_.is_open()) {
@@ -139,13 +154,13 @@ class Board {
           progress("capturing %ux%u %s from %s", l.width, l.height, board::fourcc_text(l.pixel_format).text, c_.capture.device.c_str());
           counter_.restart();
           luma_.assign(board::luma_scratch_bytes(l), 0);
-          backoff_ms = 50;
+          backoff_ms_ = c_.reopen_min_ms;
           reported_open_failure = false;
         } else {
           if (!reported_open_failure) std::fprintf(stderr, "gabarit-board: %s; retrying\n", capture_.error().c_str());
           reported_open_failure = true;
-          wait_for_signal(backoff_ms);
-          backoff_ms = std::min(backoff_ms * 2, c_.reopen_max_ms);
+          wait_for_signal(backoff_ms_);
+          backoff_ms_ = std::min(backoff_ms_ * 2, c_.reopen_max_ms);
           continue;
         }
       }
@@ -215,6 +230,7 @@ class Board {
     std::fprintf(stderr, "gabarit-board: lost %s: %s; reopening\n", c_.capture.device.c_str(), why.c_str());
     capture_.close();
     if (!gpio_.set_lock(false)) std::fprintf(stderr, "gabarit-board: %s\n", gpio_.error().c_str());
+    wait_for_signal(backoff_ms_);  // a camera going away often takes a moment to be gone for good
   }
 
   void on_trigger() {
@@ -271,7 +287,8 @@ class Board {
     pose_ = row.step.pose;
     ++tracked_;
     char tail[64];
-    std::snprintf(tail, sizeof tail, ",%u,%llu", frame.sequence, ull(frame.timestamp_us));
+    int n = std::snprintf(tail, sizeof tail, ",%u,%llu", frame.sequence, ull(frame.timestamp_us));
+    if (c_.frame_crc) std::snprintf(tail + n, sizeof tail - static_cast<std::size_t>(n), ",%08x", luma_crc32(image));
     const std::string line = host::pose_csv_row(row) + tail;
     std::printf("%s\n", line.c_str());
     udp_.send(line);
@@ -293,6 +310,7 @@ class Board {
   std::vector<std::uint8_t> luma_;
   bool running_;
   bool stop_ = false;
+  int backoff_ms_ = 0;  // wait before the next reopen attempt
   int status_ = 0;
   std::uint64_t tracked_ = 0, delivered_ = 0, dropped_ = 0, error_frames_ = 0, bad_frames_ = 0, losses_ = 0, stalls_ = 0;
 };

@@ -4,8 +4,17 @@
 
 #include <vector>
 
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <poll.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <string>
+
 #include "frame_counter.hpp"
 #include "luma.hpp"
+#include "udp_sender.hpp"
 
 namespace gabarit::board {
 namespace {
@@ -69,6 +78,39 @@ TEST(FrameCounter, GapsInSequenceNumbersAreDroppedFrames) {
   EXPECT_EQ(c.delivered(1), 0u);
   EXPECT_EQ(c.delivered(0), 0u);  // backwards without a restart: a new run, not 4 billion drops
   EXPECT_EQ(c.dropped_count(), 2u);
+}
+
+TEST(UdpSender, SendsEachLineAsOneDatagram) {
+  const int rx = ::socket(AF_INET, SOCK_DGRAM, 0);
+  ASSERT_GE(rx, 0);
+  sockaddr_in addr{};
+  addr.sin_family = AF_INET;
+  addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  ASSERT_EQ(::bind(rx, reinterpret_cast<sockaddr*>(&addr), sizeof addr), 0);
+  socklen_t len = sizeof addr;
+  ASSERT_EQ(::getsockname(rx, reinterpret_cast<sockaddr*>(&addr), &len), 0);
+  UdpSender udp;
+  ASSERT_TRUE(udp.open("127.0.0.1:" + std::to_string(ntohs(addr.sin_port)))) << udp.error();
+  udp.send("0,1.000,2.000,0.000,0,10,1.000000,tracking,7,123");
+  udp.send("1,2.000,3.000,0.000,0,11,1.000000,tracking,8,456");
+  for (const char* want : {"0,1.000,2.000,0.000,0,10,1.000000,tracking,7,123", "1,2.000,3.000,0.000,0,11,1.000000,tracking,8,456"}) {
+    pollfd p{rx, POLLIN, 0};
+    ASSERT_EQ(::poll(&p, 1, 2000), 1);
+    char buffer[256];
+    const ssize_t n = ::recv(rx, buffer, sizeof buffer, 0);
+    ASSERT_GT(n, 0);
+    EXPECT_EQ(std::string(buffer, static_cast<std::size_t>(n)), want);
+  }
+  EXPECT_EQ(udp.failed(), 0u);
+  ::close(rx);
+}
+
+TEST(UdpSender, BadDestinationsAreRefusedWithAReason) {
+  for (const char* bad : {"localhost", ":9000", "host:", "256.1.1.1.1:x"}) {
+    UdpSender udp;
+    EXPECT_FALSE(udp.open(bad)) << bad;
+    EXPECT_NE(udp.error().find("--udp"), std::string::npos) << bad;
+  }
 }
 
 }  // namespace

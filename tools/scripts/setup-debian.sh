@@ -11,6 +11,7 @@ packages=(
   python3-skimage netpbm  # the real photograph behind the 'watch' shape, converted at run time
   verilator zlib1g-dev    # hardware voter co-simulation (FST waveforms need zlib)
   libgpiod-dev            # the board application's GPIO lines (libgpiod 1.6, the v1 API)
+  linux-kbuild-6.1 cpio xz-utils  # the virtual board: gpio-sim built against the arm64 headers, its initramfs
   yosys nextpnr-ice40 fpga-icestorm  # hardware voter synthesis and place-and-route
 )
 # The board application's libgpiod for the cross targets, from Debian's
