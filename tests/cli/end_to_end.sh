@@ -18,7 +18,7 @@ expect() {
 }
 
 # Help everywhere, exit 0.
-for cmd in "tables build" "tables inspect" synth track eval; do
+for cmd in "tables build" "tables inspect" synth track eval vectors; do
   $g $cmd --help | grep -q "^usage: gabarit $cmd" || fail "$cmd --help"
 done
 $g --help | grep -q "tables build" || fail "gabarit --help"
@@ -55,6 +55,8 @@ expect 2 "unexpected argument" $g tables build --model-points "$d/model.csv" str
 
 # Errors: usage errors exit 2, bad input exits 1, each naming the problem.
 expect 2 "unknown command" $g frobnicate
+expect 2 "missing required option --out" $g vectors --frames 2
+expect 2 "--depths" $g vectors --out "$work/v" --depths 0
 expect 2 "missing required option --x" $g tables build --model-points "$d/model.csv" --binary --y 0:0:1 -o "$work/x.gbt"
 expect 2 "want MIN:MAX:CELLS" $g tables build --model-points "$d/model.csv" --binary --x 5 --y 0:0:1 -o "$work/x.gbt"
 expect 2 "one cell needs MIN == MAX" $g tables build --model-points "$d/model.csv" --binary --x 0:3:1 --y 0:0:1 -o "$work/x.gbt"
