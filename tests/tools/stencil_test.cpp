@@ -2,6 +2,10 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
+#include "gabarit/host/rng.hpp"
+
 #include <cmath>
 #include <set>
 
@@ -46,6 +50,32 @@ TEST(Stencil, SweptArcsCoverTheWholeArc) {
 // The table against an independent brute-force computation: for random
 // shapes, spaces and frames, the vote count of every cell is |P ∩ S_U|,
 // with S_U = { m + (kx, ky) : m in model, kx, ky integer translations of U }.
+// The builder's fast translation sweep (a shift, or a bitmap over the
+// bounding box) against the definition: every arc pixel plus every integer
+// translation of the cell, sorted and de-duplicated.
+TEST(Stencil, TranslationSweepEqualsTheDefinition) {
+  host::Rng rng(5);
+  for (int trial = 0; trial < 50; ++trial) {
+    std::vector<Point> arcs;
+    for (int i = 0; i < 40; ++i) arcs.push_back({rng.uniform_int(-20, 20), rng.uniform_int(-20, 20)});
+    std::sort(arcs.begin(), arcs.end());
+    arcs.erase(std::unique(arcs.begin(), arcs.end()), arcs.end());
+    CellBounds cell;
+    cell.x_lo = static_cast<float>(rng.uniform_int(-8, 4)) + 0.25f * static_cast<float>(rng.uniform_int(0, 3));
+    cell.x_hi = cell.x_lo + 0.5f * static_cast<float>(rng.uniform_int(0, 8));
+    cell.y_lo = static_cast<float>(rng.uniform_int(-8, 4)) + 0.25f * static_cast<float>(rng.uniform_int(0, 3));
+    cell.y_hi = cell.y_lo + 0.5f * static_cast<float>(rng.uniform_int(0, 8));
+    const host::IntegerRange tx = host::integer_translations(cell.x_lo, cell.x_hi), ty = host::integer_translations(cell.y_lo, cell.y_hi);
+    std::vector<Point> want;
+    for (const Point& a : arcs)
+      for (std::int32_t dx = tx.first; dx <= tx.last; ++dx)
+        for (std::int32_t dy = ty.first; dy <= ty.last; ++dy) want.push_back({a.x + dx, a.y + dy});
+    std::sort(want.begin(), want.end());
+    want.erase(std::unique(want.begin(), want.end()), want.end());
+    EXPECT_EQ(host::translate_sweep(arcs, cell), want) << "trial " << trial;
+  }
+}
+
 TEST(Stencil, TableVotesEqualBruteForceIntersectionCounts) {
   host::Rng rng(4242);
   for (int round = 0; round < 40; ++round) {

@@ -38,18 +38,43 @@ std::vector<Point> swept_arcs(const std::vector<Point>& points, float theta_lo_d
   return out;
 }
 
-std::vector<Point> stencil(const std::vector<Point>& points, const CellBounds& cell) {
-  const std::vector<Point> arcs = swept_arcs(points, cell.theta_lo_deg, cell.theta_hi_deg);
+std::vector<Point> translate_sweep(const std::vector<Point>& arcs, const CellBounds& cell) {
   const IntegerRange tx = integer_translations(cell.x_lo, cell.x_hi);
   const IntegerRange ty = integer_translations(cell.y_lo, cell.y_hi);
   std::vector<Point> out;
-  out.reserve(arcs.size() * static_cast<std::size_t>(tx.last - tx.first + 1) * static_cast<std::size_t>(ty.last - ty.first + 1));
-  for (std::int32_t dx = tx.first; dx <= tx.last; ++dx)
-    for (std::int32_t dy = ty.first; dy <= ty.last; ++dy)
-      for (const Point& a : arcs) out.push_back({a.x + dx, a.y + dy});
-  std::sort(out.begin(), out.end());
-  out.erase(std::unique(out.begin(), out.end()), out.end());
+  if (arcs.empty()) return out;
+  if (tx.first == tx.last && ty.first == ty.last) {
+    // One translation (cells up to a pixel wide): a shift keeps the order.
+    out.reserve(arcs.size());
+    for (const Point& a : arcs) out.push_back({a.x + tx.first, a.y + ty.first});
+    return out;
+  }
+  // Several: mark the swept pixels in a bitmap over the stencil's bounding box
+  // and read it column by column, which is (x, y) order.
+  std::int32_t min_x = arcs.front().x, max_x = arcs.back().x, min_y = arcs.front().y, max_y = min_y;
+  for (const Point& a : arcs) {
+    min_y = std::min(min_y, a.y);
+    max_y = std::max(max_y, a.y);
+  }
+  const auto w = static_cast<std::size_t>(max_x - min_x + 1 + tx.last - tx.first);
+  const auto h = static_cast<std::size_t>(max_y - min_y + 1 + ty.last - ty.first);
+  std::vector<std::uint8_t> covered(w * h, 0);  // column-major: index = x * h + y
+  for (const Point& a : arcs) {
+    const auto x0 = static_cast<std::size_t>(a.x - min_x), y0 = static_cast<std::size_t>(a.y - min_y);
+    for (std::int32_t dx = 0; dx <= tx.last - tx.first; ++dx) {
+      std::uint8_t* column = &covered[(x0 + static_cast<std::size_t>(dx)) * h + y0];
+      for (std::int32_t dy = 0; dy <= ty.last - ty.first; ++dy) column[dy] = 1;
+    }
+  }
+  for (std::size_t x = 0; x < w; ++x)
+    for (std::size_t y = 0; y < h; ++y)
+      if (covered[x * h + y])
+        out.push_back({min_x + tx.first + static_cast<std::int32_t>(x), min_y + ty.first + static_cast<std::int32_t>(y)});
   return out;
+}
+
+std::vector<Point> stencil(const std::vector<Point>& points, const CellBounds& cell) {
+  return translate_sweep(swept_arcs(points, cell.theta_lo_deg, cell.theta_hi_deg), cell);
 }
 
 }  // namespace gabarit::host

@@ -50,8 +50,16 @@ std::vector<std::byte> build_table(const ModelStack& model, const BuildOptions& 
   std::int64_t min_x = std::numeric_limits<std::int64_t>::max(), min_y = min_x;
   std::int64_t max_x = std::numeric_limits<std::int64_t>::min(), max_y = max_x;
   std::uint64_t total = 0;
+  // The rotation sweep depends only on (depth, theta cell), shared by the
+  // x*y cells that follow one another in index order.
+  std::vector<Point> arcs;
   for (std::size_t c = 0; c < cells.size(); ++c) {
-    stencils[c] = stencil(model.depths[cells[c].depth], cells[c]);
+    const CellBounds& u = cells[c];
+    if (c == 0 || u.depth != cells[c - 1].depth || u.theta_lo_deg != cells[c - 1].theta_lo_deg ||
+        u.theta_hi_deg != cells[c - 1].theta_hi_deg) {
+      arcs = swept_arcs(model.depths[u.depth], u.theta_lo_deg, u.theta_hi_deg);
+    }
+    stencils[c] = translate_sweep(arcs, u);
     for (const Point& p : stencils[c]) {
       min_x = std::min<std::int64_t>(min_x, p.x);
       max_x = std::max<std::int64_t>(max_x, p.x);

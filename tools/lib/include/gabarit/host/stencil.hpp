@@ -32,8 +32,13 @@ IntegerRange integer_translations(float lo, float hi);
 // Step 1: the de-duplicated, sorted arc pixels of all points over [lo, hi] degrees.
 std::vector<Point> swept_arcs(const std::vector<Point>& points, float theta_lo_deg, float theta_hi_deg);
 
+// Step 2: `arcs` (sorted, without duplicates) swept over the cell's integer
+// translations, sorted by (x, y) and without duplicates.
+std::vector<Point> translate_sweep(const std::vector<Point>& arcs, const CellBounds& cell);
+
 // Steps 1 and 2: the stencil of `cell` for `points` (the features of the
-// cell's depth), sorted by (x, y) and without duplicates.
+// cell's depth), sorted by (x, y) and without duplicates. The table builder
+// computes step 1 once per (depth, theta cell) and step 2 per cell.
 std::vector<Point> stencil(const std::vector<Point>& points, const CellBounds& cell);
 
 }  // namespace gabarit::host
