@@ -45,6 +45,20 @@ const char* track_state_name(TrackState state) noexcept {
   return "unknown";
 }
 
+Pose pose_of_cell(const TableView& table, std::uint32_t cell_index, const Pose& previous, std::int32_t cx, std::int32_t cy,
+                  float offset_x, float offset_y, float offset_theta_deg) noexcept {
+  const SinCos sc = sin_cos_deg(previous.theta_deg);
+  const CellBounds cell = table.cell(cell_index);
+  const float tx = cell.x_centre() + offset_x;
+  const float ty = cell.y_centre() + offset_y;
+  Pose pose;
+  pose.x = static_cast<float>(cx) + (sc.cos * tx - sc.sin * ty);
+  pose.y = static_cast<float>(cy) + (sc.sin * tx + sc.cos * ty);
+  pose.theta_deg = previous.theta_deg + cell.theta_centre_deg() + offset_theta_deg;
+  pose.depth = cell.depth;
+  return pose;
+}
+
 Status track_step(const TableView& table, const Detector& detector, const ImageView& image, const Pose& previous,
                   TrackerScratch scratch, StepResult& result) noexcept {
   if (!image.valid() || !finite_and_bounded(previous.x) || !finite_and_bounded(previous.y) ||
@@ -89,13 +103,7 @@ Status track_step(const TableView& table, const Detector& detector, const ImageV
   GABARIT_TRY(select_top_cells(table, scratch.counters, std::span<CellScore>(top, k)));
   if (k == 1) top[1] = {kNoCell, 0, 0};
 
-  const CellBounds cell = table.cell(top[0].cell);
-  const float tx = cell.x_centre();
-  const float ty = cell.y_centre();
-  result.pose.x = static_cast<float>(cx) + (sc.cos * tx - sc.sin * ty);
-  result.pose.y = static_cast<float>(cy) + (sc.sin * tx + sc.cos * ty);
-  result.pose.theta_deg = previous.theta_deg + cell.theta_centre_deg();
-  result.pose.depth = cell.depth;
+  result.pose = pose_of_cell(table, top[0].cell, previous, cx, cy);
   result.best = top[0];
   result.runner_up = top[1];
   result.score = normalised_score(top[0]);

@@ -15,6 +15,7 @@
 #include "gabarit/features.hpp"
 #include "gabarit/host/image_io.hpp"
 #include "gabarit/tracker.hpp"
+#include "gabarit/tracking_session.hpp"
 #include "gabarit/voter.hpp"
 #include "test_tables.hpp"
 
@@ -99,6 +100,7 @@ int main() {
   const TrackerScratch scratch{features, counters, mask};
   const TrackerScratch dense{features, counters, mask, masks, dense_scratch};
   const ImageView view = frame.view();
+  const host::GrayImage blank(64, 64);  // allocated here, before any check
   const ImageWindow window{0, 0, 64, 64};
 
   // Positive control: the interposer must see a plain allocation.
@@ -139,6 +141,16 @@ int main() {
     StepResult r;
     return track_step(table, view, Pose{32, 32, -2.0f, 0}, dense, r) == Status::kOk;
   });
-  std::printf("%d passed, %d failed\n", 8 - failures, failures);
+  // The session: start, a tracking frame, then lost frames (the recovery
+  // search places the table 147 times) on an empty image.
+  TrackingSession session(table, nullptr, detector_of(table));
+  expect_no_allocation("tracking session start", [&] { return session.start(SessionOptions{}, Pose{32, 32, 0, 0}) == Status::kOk; });
+  expect_no_allocation("tracking session, filter + refine + recovery", [&] {
+    SessionResult r;
+    bool ok = session.step(view, {scratch, {}}, r) == Status::kOk;
+    for (int i = 0; i < 12 && ok; ++i) ok = session.step(blank.view(), {scratch, {}}, r) == Status::kOk;
+    return ok && session.lost();
+  });
+  std::printf("%d passed, %d failed\n", 10 - failures, failures);
   return failures == 0 ? 0 : 1;
 }

@@ -43,6 +43,8 @@ int tables_build(const std::vector<std::string>& argv) {
              {"--y", "MIN:MAX:CELLS", "y translations, as --x", false, true},
              {"--theta", "MIN:MAX:CELLS", "rotation in degrees, as --x (default 0:0:1)"},
              {"--keep", "RATIO", "fraction of stencil references kept by decimation, (0,1] (default 1)"},
+             {"--decimation", "overlap|uniform", "which references go: the most overlapped first (the thesis's, default)\n"
+              "                          or each with the same probability (for coarse recovery tables at a few percent)"},
              {"--seed", "N", "decimation seed (default 1)"},
              {"--binary", "", "binary detector: a non-zero pixel is a feature (model images and frames)"},
              {"--threshold", "N", "gradient detector threshold 1..2040 (default: a quarter of the model's strongest edge)"},
@@ -95,6 +97,11 @@ int tables_build(const std::vector<std::string>& argv) {
   bo.keep = args.number("--keep", 1.0, 0.0, 1.0);
   if (!(bo.keep > 0)) throw UsageError("--keep must be above 0");
   bo.seed = static_cast<std::uint64_t>(args.integer("--seed", 1, 0, INT64_MAX));
+  if (const std::string d = args.get_or("--decimation", "overlap"); d == "uniform") {
+    bo.decimation = host::Decimation::kUniform;
+  } else if (d != "overlap") {
+    throw UsageError("--decimation '" + d + "': want overlap or uniform");
+  }
   if (isatty(STDERR_FILENO)) {
     bo.progress = [](std::size_t done, std::size_t total) {
       std::fprintf(stderr, "\rstencils: %zu/%zu cells", done, total);

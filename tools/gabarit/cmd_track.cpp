@@ -24,6 +24,10 @@ int track(const std::vector<std::string>& argv) {
              {"--init", "X,Y[,THETA[,DEPTH]]", "pose before the first frame (image position of the reference point)", false, true},
              {"--binary", "", "use the binary detector on frames whatever the table says"},
              {"--voter", "auto|csr|dense", "voting method (default auto: dense when the table has <= 1024 cells); same results"},
+             {"--motion-filter", "", "predict the ROI, gate candidates by the motion model, grade confidence (thesis Alg. 4)"},
+             {"--refine", "", "sub-cell x, y, theta from a parabola through the neighbouring cells' scores"},
+             {"--recover", "", "once lost, search around the last confident pose until a confident hit"},
+             {"--coarse", "T", "table for the recovery search (larger cells, wider window; implies --recover)"},
              {"-o", "POSES.csv", "pose output (default stdout)"},
              {"--stats", "STATS.json", "per-frame timing and vote statistics"}});
   if (!args.parse(argv)) return 0;
@@ -34,8 +38,23 @@ int track(const std::vector<std::string>& argv) {
   }
   const Pose pose = parse_init_pose(args.get("--init"), table, "--init");
   const host::VoterChoice voter = parse_voter(args.get_or("--voter", "auto"), "--voter");
-  std::optional<Detector> detector;
-  if (args.has("--binary")) detector = Detector{table_format::DetectorKind::kBinary, 0};
+  host::TrackingOptions options;
+  options.voter = voter;
+  if (args.has("--binary")) options.detector = Detector{table_format::DetectorKind::kBinary, 0};
+  options.session.motion_filter = args.has("--motion-filter");
+  options.session.refine = args.has("--refine");
+  options.session.recover = args.has("--recover") || args.has("--coarse");
+  std::optional<host::MappedFile> coarse_file;
+  TableView coarse;
+  if (args.has("--coarse")) {
+    coarse_file.emplace(args.get("--coarse"));
+    if (const Status s = TableView::open(coarse_file->bytes(), coarse); s != Status::kOk)
+      throw host::Error(args.get("--coarse") + ": not a valid table: " + status_name(s));
+    if (coarse.depth_count() != table.depth_count())
+      throw UsageError("--coarse: the coarse table has " + std::to_string(coarse.depth_count()) + " depths, the table " +
+                       std::to_string(table.depth_count()));
+    options.coarse = &coarse;
+  }
 
   std::ofstream file_out;
   std::ostream* out = &std::cout;
@@ -50,7 +69,7 @@ int track(const std::vector<std::string>& argv) {
   double features = 0, votes = 0;
   std::uint64_t dropped = 0;
   std::size_t lost = 0, uncertain = 0;
-  host::run_tracking(table, *frames, pose, detector, [&](const host::TrackRow& row) {
+  host::run_tracking(table, *frames, pose, options, [&](const host::TrackRow& row) {
     *out << host::pose_csv_row(row) << '\n';
     micros.push_back(row.micros);
     features += row.step.features;
@@ -58,7 +77,7 @@ int track(const std::vector<std::string>& argv) {
     dropped += row.step.features_dropped;
     lost += row.step.state == TrackState::kLost;
     uncertain += row.step.state == TrackState::kUncertain;
-  }, voter);
+  });
   out->flush();
   if (!*out) throw host::Error("pose output: write failed");
   const host::TimingSummary t = host::summarise_timing(micros);

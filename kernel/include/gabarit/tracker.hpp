@@ -106,6 +106,13 @@ struct Detector {
 };
 inline Detector detector_of(const TableView& t) noexcept { return {t.detector_kind(), t.detector_threshold()}; }
 
+// The pose update for cell `cell` measured from `previous` with the ROI centred
+// on (cx, cy): (x, y) = c + R(theta) (t + offset), theta' = theta + a + offset,
+// depth' = n (see the geometry above). track_step uses it with no offset; the
+// motion filter for its candidates and refinement for the sub-cell offset.
+Pose pose_of_cell(const TableView& table, std::uint32_t cell, const Pose& previous, std::int32_t cx, std::int32_t cy,
+                  float offset_x = 0.0f, float offset_y = 0.0f, float offset_theta_deg = 0.0f) noexcept;
+
 // Precondition: `table` was opened successfully. Errors: kInvalidArgument for
 // an invalid image, a non-finite pose or a bad detector threshold,
 // kBufferTooSmall for short scratch.

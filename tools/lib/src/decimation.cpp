@@ -27,10 +27,16 @@ double decimation_alpha(const std::vector<std::uint32_t>& overlap, double keep) 
   return hi;
 }
 
-std::vector<bool> decimate(const std::vector<std::uint32_t>& overlap, double keep, std::uint64_t seed) {
+std::vector<bool> decimate(const std::vector<std::uint32_t>& overlap, double keep, std::uint64_t seed, Decimation mode) {
   if (!(keep > 0.0) || keep > 1.0) throw Error("--keep must be in (0, 1]");
   std::vector<bool> kept(overlap.size(), true);
   if (keep == 1.0 || overlap.empty()) return kept;
+  if (mode == Decimation::kUniform) {
+    Rng rng(seed);
+    for (std::size_t i = 0; i < overlap.size(); ++i)
+      if (rng.bernoulli(1.0 - keep)) kept[i] = false;
+    return kept;
+  }
   const double alpha = decimation_alpha(overlap, keep);
   Rng rng(seed);
   for (std::size_t i = 0; i < overlap.size(); ++i) {

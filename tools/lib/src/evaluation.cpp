@@ -45,9 +45,19 @@ Accuracy evaluate(const std::vector<PoseSample>& poses, const std::vector<PoseSa
   std::map<std::uint32_t, const PoseSample*> by_frame;
   for (const PoseSample& p : poses) by_frame[p.frame] = &p;
   Accuracy a;
-  double sum = 0;
+  double sum = 0, sum_deg = 0;
+  bool hidden_before = false;
+  int pending = -1;  // frames since the last return to visibility, while not reacquired
   for (const PoseSample& t : truth) {
-    if (!t.visible) continue;
+    if (!t.visible) {
+      hidden_before = true;
+      continue;
+    }
+    if (hidden_before) {
+      if (pending >= 0) a.reacquired_after.push_back(-1);  // hidden again before reacquiring
+      pending = 0;
+      hidden_before = false;
+    }
     const auto it = by_frame.find(t.frame);
     if (it == by_frame.end()) {
       ++a.missing;
@@ -65,8 +75,23 @@ Accuracy evaluate(const std::vector<PoseSample>& poses, const std::vector<PoseSa
     }
     if (e <= 1.0) ++a.within_1px;
     if (e <= 2.0) ++a.within_2px;
+    const double de = std::fabs(it->second->theta_deg - t.theta_deg);
+    sum_deg += de;
+    a.max_error_deg = std::max(a.max_error_deg, de);
+    if (de <= 1.0) ++a.within_1deg;
+    if (it->second->depth == t.depth) ++a.depth_exact;
+    if (pending >= 0) {
+      if (e <= 2.0) {
+        a.reacquired_after.push_back(pending);
+        pending = -1;
+      } else {
+        ++pending;
+      }
+    }
   }
+  if (pending >= 0) a.reacquired_after.push_back(-1);
   a.mean_error_px = a.frames ? sum / static_cast<double>(a.frames) : 0;
+  a.mean_error_deg = a.frames ? sum_deg / static_cast<double>(a.frames) : 0;
   return a;
 }
 
@@ -75,7 +100,11 @@ std::string accuracy_json(const Accuracy& a) {
   o << "{\n  \"frames\": " << a.frames << ",\n  \"exact\": " << a.exact << ",\n  \"wrong\": " << a.wrong_frames.size()
     << ",\n  \"missing\": " << a.missing << ",\n  \"within_1px\": " << a.within_1px << ",\n  \"within_2px\": " << a.within_2px
     << ",\n  \"mean_error_px\": " << a.mean_error_px << ",\n  \"max_error_px\": " << a.max_error_px
-    << ",\n  \"wrong_frames\": [";
+    << ",\n  \"within_1deg\": " << a.within_1deg << ",\n  \"mean_error_deg\": " << a.mean_error_deg
+    << ",\n  \"max_error_deg\": " << a.max_error_deg << ",\n  \"depth_exact\": " << a.depth_exact
+    << ",\n  \"reacquired_after_frames\": [";
+  for (std::size_t i = 0; i < a.reacquired_after.size(); ++i) o << (i ? ", " : "") << a.reacquired_after[i];
+  o << "],\n  \"wrong_frames\": [";
   for (std::size_t i = 0; i < a.wrong_frames.size() && i < 100; ++i) o << (i ? ", " : "") << a.wrong_frames[i];
   o << "]\n}\n";
   return o.str();

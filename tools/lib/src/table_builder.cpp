@@ -87,7 +87,7 @@ std::vector<std::byte> build_table(const ModelStack& model, const BuildOptions& 
   overlap.reserve(total);
   for (const auto& s : stencils)
     for (const Point& p : s) overlap.push_back(cover[pixel_of(p)]);
-  const std::vector<bool> kept = decimate(overlap, options.keep, options.seed);
+  const std::vector<bool> kept = decimate(overlap, options.keep, options.seed, options.decimation);
 
   // CSR: count per pixel, prefix sums, then fill in increasing cell order so
   // each pixel's list is strictly increasing.

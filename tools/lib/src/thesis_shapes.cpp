@@ -13,7 +13,7 @@
 namespace gabarit::host {
 namespace {
 
-constexpr const char* kWatchPng = "/usr/lib/python3/dist-packages/skimage/data/coffee.png";
+constexpr const char* kSkimageData = "/usr/lib/python3/dist-packages/skimage/data/";
 
 GrayImage box_downscale(const GrayImage& in, std::uint32_t k) {
   if (k <= 1) return in;
@@ -57,23 +57,27 @@ std::vector<Point> photo_edge_points(const GrayImage& photo, std::size_t target,
   return dist(a.size()) <= dist(b.size()) ? a : b;
 }
 
-std::string watch_photo_pgm() {
-  if (const char* env = std::getenv("GABARIT_WATCH_PGM"); env && *env) return env;
-  const auto out = std::filesystem::temp_directory_path() / ("gabarit-watch-" + std::to_string(::getuid()) + ".pgm");
+std::string debian_photo_pgm(const std::string& name) {
+  const std::string png = std::string(kSkimageData) + name + ".png";
+  const auto out = std::filesystem::temp_directory_path() / ("gabarit-" + name + "-" + std::to_string(::getuid()) + ".pgm");
   std::error_code ec;
   if (std::filesystem::exists(out, ec) && std::filesystem::file_size(out, ec) > 0) return out.string();
-  if (!std::filesystem::exists(kWatchPng, ec)) {
-    throw Error(std::string("the 'watch' shape needs the photograph ") + kWatchPng +
-                " (apt-get install python3-skimage), or GABARIT_WATCH_PGM=FILE.pgm");
+  if (!std::filesystem::exists(png, ec)) {
+    throw Error("the photograph " + png + " is missing (apt-get install python3-skimage)");
   }
   const std::string partial = out.string() + ".part" + std::to_string(::getpid());
-  const std::string cmd = std::string("pngtopnm '") + kWatchPng + "' 2>/dev/null | ppmtopgm > '" + partial + "' 2>/dev/null";
+  const std::string cmd = "pngtopnm '" + png + "' 2>/dev/null | ppmtopgm > '" + partial + "' 2>/dev/null";
   if (std::system(cmd.c_str()) != 0 || !std::filesystem::exists(partial, ec) || std::filesystem::file_size(partial, ec) == 0) {
     std::filesystem::remove(partial, ec);
-    throw Error("converting the watch photograph failed: needs netpbm (apt-get install netpbm)");
+    throw Error("converting " + png + " failed: needs netpbm (apt-get install netpbm)");
   }
   std::filesystem::rename(partial, out, ec);  // atomic: concurrent runs never see half a file
   return out.string();
+}
+
+std::string watch_photo_pgm() {
+  if (const char* env = std::getenv("GABARIT_WATCH_PGM"); env && *env) return env;
+  return debian_photo_pgm("coffee");
 }
 
 std::vector<Point> watch_shape() {

@@ -46,27 +46,37 @@ TrackerBuffers::TrackerBuffers(const TableView& table, VoterChoice voter)
 
 TrackerScratch TrackerBuffers::scratch() { return {features_, counters_, mask_, masks_, dense_scratch_}; }
 
-void run_tracking(const TableView& table, FrameSource& frames, const Pose& init, const std::optional<Detector>& detector,
-                  const std::function<void(const TrackRow&)>& on_row, VoterChoice voter) {
-  TrackerBuffers buffers(table, voter);
-  const TrackerScratch scratch = buffers.scratch();
-  const Detector use = detector ? *detector : detector_of(table);
-
+void run_tracking(const TableView& table, FrameSource& frames, const Pose& init, const TrackingOptions& options,
+                  const std::function<void(const TrackRow&)>& on_row) {
+  TrackerBuffers buffers(table, options.voter);
+  std::optional<TrackerBuffers> coarse_buffers;
+  SessionScratch scratch{buffers.scratch(), {}};
+  if (options.coarse != nullptr) {
+    coarse_buffers.emplace(*options.coarse, options.voter);
+    scratch.coarse = coarse_buffers->scratch();
+  }
+  TrackingSession session(table, options.coarse, options.detector ? *options.detector : detector_of(table));
+  if (const Status s = session.start(options.session, init); s != Status::kOk) {
+    throw Error(std::string("tracking options or initial pose rejected: ") + status_name(s));
+  }
   GrayImage frame;
-  Pose pose = init;
   TrackRow row;
+  SessionResult result;
   for (std::uint32_t index = 0; frames.next(frame); ++index) {
     const auto start = std::chrono::steady_clock::now();
-    const Status status = track_step(table, use, frame.view(), pose, scratch, row.step);
+    const Status status = session.step(frame.view(), scratch, result);
     const auto stop = std::chrono::steady_clock::now();
     if (status != Status::kOk) {
       throw Error("frame " + std::to_string(index) + ": tracking failed: " + status_name(status));
     }
     row.frame = index;
     row.micros = std::chrono::duration<double, std::micro>(stop - start).count();
-    // A lost frame keeps the previous pose: there is no evidence to move it.
-    if (row.step.state == TrackState::kLost) row.step.pose = pose;
-    pose = row.step.pose;
+    row.step = result.step;
+    row.step.pose = result.pose;
+    row.step.state = result.state;
+    row.step.score = result.score;
+    row.confidence = result.confidence;
+    row.reacquired = result.reacquired;
     on_row(row);
   }
 }

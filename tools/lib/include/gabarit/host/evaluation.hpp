@@ -26,6 +26,13 @@ struct Accuracy {
   std::size_t missing = 0;         // visible truth frames with no pose row
   double mean_error_px = 0;
   double max_error_px = 0;
+  std::size_t within_1deg = 0;     // |theta error| <= 1 degree
+  double mean_error_deg = 0;
+  double max_error_deg = 0;
+  std::size_t depth_exact = 0;     // depth index equal to the truth's
+  // For each return to visibility after hidden frames (an occlusion): frames
+  // from the first visible one until the pose is within 2 px (-1: never).
+  std::vector<int> reacquired_after;
   std::vector<std::uint32_t> wrong_frames;  // not exact
 };
 

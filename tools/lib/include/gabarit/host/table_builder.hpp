@@ -9,6 +9,7 @@
 #include <functional>
 #include <vector>
 
+#include "gabarit/host/decimation.hpp"
 #include "gabarit/host/model.hpp"
 #include "gabarit/host/state_space.hpp"
 
@@ -17,6 +18,7 @@ namespace gabarit::host {
 struct BuildOptions {
   StateSpace space;      // space.depths is taken from the model
   double keep = 1.0;     // fraction of references kept by decimation
+  Decimation decimation = Decimation::kOverlap;
   std::uint64_t seed = 1;
   // Called now and then with (cells done, cells total) while stencils are built.
   std::function<void(std::size_t, std::size_t)> progress;

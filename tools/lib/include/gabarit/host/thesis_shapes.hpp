@@ -25,6 +25,11 @@ std::vector<Point> thesis_curve();
 // blocks, relative to the image centre.
 std::vector<Point> photo_edge_points(const GrayImage& photo, std::size_t target, std::uint32_t downscale);
 
+// A photograph of python3-skimage's data folder (NAME.png: coffee, camera,
+// gravel, brick, ...) converted to PGM with netpbm into the temporary
+// directory, once; returns its path. Throws Error saying what to install.
+std::string debian_photo_pgm(const std::string& name);
+
 // The Debian photograph behind `watch` as a PGM path: $GABARIT_WATCH_PGM if
 // set, else python3-skimage's coffee.png converted with pngtopnm | ppmtopgm
 // into the temporary directory. Throws Error saying what to install.

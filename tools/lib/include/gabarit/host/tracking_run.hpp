@@ -12,12 +12,15 @@
 #include "gabarit/host/image_io.hpp"
 #include "gabarit/table_view.hpp"
 #include "gabarit/tracker.hpp"
+#include "gabarit/tracking_session.hpp"
 
 namespace gabarit::host {
 
 struct TrackRow {
   std::uint32_t frame = 0;
   StepResult step;
+  Confidence confidence = Confidence::kNone;
+  bool reacquired = false;
   double micros = 0;  // kernel time for this frame
 };
 
@@ -46,9 +49,24 @@ class TrackerBuffers {
   std::vector<std::uint64_t> masks_, dense_scratch_;
 };
 
-// Calls on_row for every frame. `detector` overrides the table's detector.
-void run_tracking(const TableView& table, FrameSource& frames, const Pose& init, const std::optional<Detector>& detector,
-                  const std::function<void(const TrackRow&)>& on_row, VoterChoice voter = VoterChoice::kAuto);
+struct TrackingOptions {
+  std::optional<Detector> detector;        // overrides the table's detector
+  VoterChoice voter = VoterChoice::kAuto;
+  SessionOptions session = kPlainSession;  // motion filter, refinement, recovery
+  const TableView* coarse = nullptr;       // the recovery search's table (else the fine one)
+};
+
+// Calls on_row for every frame. row.step is the frame's vote with the
+// session's decision in pose, state and score (tracking_session.hpp).
+void run_tracking(const TableView& table, FrameSource& frames, const Pose& init, const TrackingOptions& options,
+                  const std::function<void(const TrackRow&)>& on_row);
+inline void run_tracking(const TableView& table, FrameSource& frames, const Pose& init, const std::optional<Detector>& detector,
+                         const std::function<void(const TrackRow&)>& on_row, VoterChoice voter = VoterChoice::kAuto) {
+  TrackingOptions options;
+  options.detector = detector;
+  options.voter = voter;
+  run_tracking(table, frames, init, options, on_row);
+}
 
 // One CSV line "frame,x,y,theta_deg,depth,votes,score,status" (no newline).
 std::string pose_csv_row(const TrackRow& row);
