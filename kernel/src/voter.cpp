@@ -37,7 +37,48 @@ void vote_scalar(const TableView& table, std::span<const RoiPoint> features, Vot
   }
 }
 
+template <class Ref>
+void vote_cell_range(const TableView& table, std::span<const RoiPoint> features, VoteCounter* counters,
+                     std::uint32_t cell_begin, std::uint32_t cell_end, std::uint64_t& votes) noexcept {
+  const std::byte* offsets = table.pixel_offsets_data();
+  const std::byte* refs = table.references_data();
+  const std::uint32_t w = table.roi_width();
+  const auto ref_at = [refs](std::uint32_t i) { return static_cast<std::uint32_t>(load_le<Ref>(refs + std::size_t{i} * sizeof(Ref))); };
+  for (const RoiPoint& f : features) {
+    const std::size_t pixel = std::size_t{f.row} * w + f.col;
+    std::uint32_t lo = load_le<std::uint32_t>(offsets + pixel * 4);
+    std::uint32_t end = load_le<std::uint32_t>(offsets + pixel * 4 + 4);
+    // First reference >= cell_begin (lists are strictly increasing).
+    std::uint32_t hi = end;
+    while (lo < hi) {
+      const std::uint32_t mid = lo + (hi - lo) / 2;
+      if (ref_at(mid) < cell_begin) lo = mid + 1;
+      else hi = mid;
+    }
+    std::uint32_t i = lo;
+    for (; i < end; ++i) {
+      const std::uint32_t cell = ref_at(i);
+      if (cell >= cell_end) break;
+      bump(counters, cell);
+    }
+    votes += i - lo;
+  }
+}
+
 }  // namespace
+
+Status accumulate_votes_for_cells(const TableView& table, std::span<const RoiPoint> features, std::span<VoteCounter> counters,
+                                  std::uint32_t cell_begin, std::uint32_t cell_end, VoteTally& tally) noexcept {
+  GABARIT_TRY(check_counters(table, counters));
+  GABARIT_TRY(check_features(table, features));
+  if (cell_begin > cell_end || cell_end > table.cell_count()) return Status::kInvalidArgument;
+  switch (table.reference_bytes()) {
+    case 1: vote_cell_range<std::uint8_t>(table, features, counters.data(), cell_begin, cell_end, tally.votes); break;
+    case 2: vote_cell_range<std::uint16_t>(table, features, counters.data(), cell_begin, cell_end, tally.votes); break;
+    default: vote_cell_range<std::uint32_t>(table, features, counters.data(), cell_begin, cell_end, tally.votes); break;
+  }
+  return Status::kOk;
+}
 
 Status clear_counters(const TableView& table, std::span<VoteCounter> counters) noexcept {
   GABARIT_TRY(check_counters(table, counters));

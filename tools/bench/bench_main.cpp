@@ -25,6 +25,7 @@
 #include <thread>
 
 #include "experiments.hpp"
+#include "microscope.hpp"
 #include "gabarit/host/error.hpp"
 #include "gabarit/host/thesis_shapes.hpp"
 #include "svg_plot.hpp"
@@ -77,6 +78,7 @@ struct Options {
   std::size_t grid_frames = 0, timing_frames = 0;
   unsigned threads = std::max(1u, std::thread::hardware_concurrency());
   std::string regression_csv;
+  bool microscope = false;
 };
 
 struct TimingRow {
@@ -358,6 +360,7 @@ int run(const Options& o) {
 
 constexpr const char* kHelp =
     "usage: gabarit bench [--quick] [--out DIR] [--threads N] [--frames N] [--timing-frames N]\n"
+    "       gabarit bench --microscope [--quick] [--out DIR]\n"
     "       gabarit bench --regression-csv FILE\n\n"
     "Re-measures the thesis's synthetic experiments (section 6.2) in one run: Table 6.1 timings against\n"
     "OpenCV's matchTemplate, the wrong-frame grid over noise x references kept (Figs. 6.16-6.19), the\n"
@@ -369,6 +372,8 @@ constexpr const char* kHelp =
     "  --threads N           grid threads (default: all cores; timings are always single-threaded)\n"
     "  --frames N            frames per grid point (default 300, quick 25)\n"
     "  --timing-frames N     frames per timed method (default 300, quick 40)\n"
+    "  --microscope          the 4-DOF microscope experiment instead (section 6.1): grayscale scene, motion\n"
+    "                        filter, refinement, recovery, OpenCV NCC bank, 2-thread voting, 4-DOF build time\n"
     "  --regression-csv F    write the regression test's small grid to F and exit\n"
     "  --help                show this help\n";
 
@@ -405,6 +410,8 @@ int main(int argc, char** argv) {
         o.grid_frames = count(1, 100000);
       } else if (a == "--timing-frames") {
         o.timing_frames = count(1, 100000);
+      } else if (a == "--microscope") {
+        o.microscope = true;
       } else if (a == "--regression-csv") {
         o.regression_csv = value();
       } else {
@@ -412,6 +419,7 @@ int main(int argc, char** argv) {
         return 2;
       }
     }
+    if (o.microscope) return run_microscope(o.out, o.quick);
     return run(o);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "gabarit bench: error: %s\n", e.what());

@@ -66,6 +66,15 @@ struct VoteTally {
   std::uint64_t votes = 0;     // counter increments (references read)
 };
 
+// accumulate_votes restricted to the cells in [cell_begin, cell_end): the
+// other counters are not touched. Each pixel's list is in increasing cell
+// order, so the range is found by binary search. Threads (or cores) that take
+// disjoint cell ranges of one counter array never write the same counter, and
+// together produce exactly accumulate_votes' counters; `tally.votes` counts
+// this range's increments, `tally.features` is not changed.
+Status accumulate_votes_for_cells(const TableView& table, std::span<const RoiPoint> features, std::span<VoteCounter> counters,
+                                  std::uint32_t cell_begin, std::uint32_t cell_end, VoteTally& tally) noexcept;
+
 // Sets every counter to zero. counters.size() must equal the cell count.
 Status clear_counters(const TableView& table, std::span<VoteCounter> counters) noexcept;
 

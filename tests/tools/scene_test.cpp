@@ -1,0 +1,93 @@
+// The grayscale 4-DOF scene (gabarit synth --scene) and the accuracy measures
+// for angle, depth and reacquisition (gabarit eval).
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <string>
+
+#include "gabarit/host/evaluation.hpp"
+#include "gabarit/host/image_io.hpp"
+#include "gabarit/host/scene_synth.hpp"
+
+namespace gabarit::host {
+namespace {
+
+std::string slurp(const std::filesystem::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+TEST(Scene, IsDeterministicWithTruthOcclusionAndADistinctFocusStack) {
+  const auto dir = std::filesystem::temp_directory_path() / ("gabarit-scene-test-" + std::to_string(::getpid()));
+  SceneOptions o;
+  o.frames = 30;
+  o.depths = 3;
+  o.occlusion_start = 10;
+  o.occlusion_frames = 5;
+  o.blur_every = 7;
+  const SceneSummary a = write_scene_sequence(o, (dir / "a").string());
+  write_scene_sequence(o, (dir / "b").string());
+  for (const char* f : {"frames.y4m", "gt.csv", "model_00.pgm", "model_02.pgm"})
+    EXPECT_EQ(slurp(dir / "a" / f), slurp(dir / "b" / f)) << f;
+  EXPECT_EQ(a.visible_frames, 25u);
+
+  const auto truth = read_pose_csv((dir / "a" / "gt.csv").string());
+  ASSERT_EQ(truth.size(), 30u);
+  double max_step = 0, max_turn = 0;
+  for (std::size_t i = 0; i < truth.size(); ++i) {
+    EXPECT_EQ(truth[i].visible, !(i >= 10 && i < 15)) << i;
+    EXPECT_LT(truth[i].depth, 3u);
+    if (i > 0) {
+      max_step = std::max(max_step, std::hypot(truth[i].x - truth[i - 1].x, truth[i].y - truth[i - 1].y));
+      max_turn = std::max(max_turn, std::fabs(truth[i].theta_deg - truth[i - 1].theta_deg));
+    }
+  }
+  EXPECT_LE(max_step, o.max_speed_px * std::sqrt(2.0) + 1e-3);
+  EXPECT_LE(max_turn, o.max_turn_deg + 1e-3);
+  // No two depths look alike.
+  const GrayImage d0 = read_pgm((dir / "a" / "model_00.pgm").string());
+  const GrayImage d1 = read_pgm((dir / "a" / "model_01.pgm").string());
+  const GrayImage d2 = read_pgm((dir / "a" / "model_02.pgm").string());
+  EXPECT_NE(d0.pixels, d1.pixels);
+  EXPECT_NE(d1.pixels, d2.pixels);
+  EXPECT_NE(d0.pixels, d2.pixels);
+  auto frames = open_frames((dir / "a" / "frames.y4m").string());
+  GrayImage frame;
+  int n = 0;
+  while (frames->next(frame)) ++n;
+  EXPECT_EQ(n, 30);
+  EXPECT_EQ(frame.width, o.width);
+  std::filesystem::remove_all(dir);
+}
+
+TEST(Evaluation, AngleDepthAndReacquisitionAreMeasured) {
+  std::vector<PoseSample> truth, poses;
+  for (std::uint32_t f = 0; f < 12; ++f) {
+    const bool hidden = f >= 4 && f < 7;
+    truth.push_back({f, 10.0 + f, 20.0, 1.0 * f, f % 2, !hidden});
+    PoseSample p{f, 10.0 + f, 20.0, 1.0 * f + (f == 2 ? 1.5 : 0.25), f % 2, true};
+    if (f == 7 || f == 8) p.x += 5;  // two frames after the occlusion before it is found again
+    if (f == 3) p.depth = 5;
+    poses.push_back(p);
+  }
+  const Accuracy a = evaluate(poses, truth);
+  EXPECT_EQ(a.frames, 9u);
+  EXPECT_EQ(a.within_1deg, 8u);
+  EXPECT_NEAR(a.max_error_deg, 1.5, 1e-9);
+  EXPECT_EQ(a.depth_exact, 8u);
+  ASSERT_EQ(a.reacquired_after.size(), 1u);
+  EXPECT_EQ(a.reacquired_after[0], 2);
+  poses[9].x += 5;
+  poses[10].x += 5;
+  poses[11].x += 5;
+  const Accuracy never = evaluate(poses, truth);
+  ASSERT_EQ(never.reacquired_after.size(), 1u);
+  EXPECT_EQ(never.reacquired_after[0], -1);
+}
+
+}  // namespace
+}  // namespace gabarit::host
