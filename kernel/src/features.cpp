@@ -104,12 +104,66 @@ Status extract_gradient_rows(const ImageView& image, const ImageWindow& window, 
   return Status::kOk;
 }
 
+namespace {
+
+// Sobel gx, gy at an interior pixel.
+inline void sobel(const ImageView& image, std::int64_t x, std::int64_t y, std::int32_t& gx, std::int32_t& gy) noexcept {
+  const std::uint8_t* up = image.pixels + static_cast<std::size_t>(y - 1) * image.stride + x;
+  const std::uint8_t* mid = up + image.stride;
+  const std::uint8_t* down = mid + image.stride;
+  gx = (up[1] + 2 * mid[1] + down[1]) - (up[-1] + 2 * mid[-1] + down[-1]);
+  gy = (down[-1] + 2 * down[0] + down[1]) - (up[-1] + 2 * up[0] + up[1]);
+}
+
+inline std::uint16_t magnitude_at(const ImageView& image, std::int64_t x, std::int64_t y) noexcept {
+  return gradient_magnitude(image, static_cast<std::uint32_t>(x), static_cast<std::uint32_t>(y));
+}
+
+}  // namespace
+
+Status extract_canny(const ImageView& image, const ImageWindow& window, std::uint16_t threshold, std::span<RoiPoint> out,
+                     FeatureCount& count) noexcept {
+  GABARIT_TRY(check(image, window));
+  if (threshold < 2) return Status::kInvalidArgument;  // the low threshold would be 0
+  count = {};
+  const std::uint16_t high = threshold, low = static_cast<std::uint16_t>(threshold / 2);
+  const Span2 s = clip(window, 1, std::int64_t{image.width} - 1, 1, std::int64_t{image.height} - 1);
+  if (s.empty()) return Status::kOk;
+  for (std::int64_t y = s.y_begin; y < s.y_end; ++y) {
+    for (std::int64_t x = s.x_begin; x < s.x_end; ++x) {
+      std::int32_t gx = 0, gy = 0;
+      sobel(image, x, y, gx, gy);
+      const std::int32_t ax = abs32(gx), ay = abs32(gy);
+      const auto m = static_cast<std::uint16_t>(ax + ay);
+      if (m < low) continue;
+      // Neighbours across the edge: tan(22.5 deg) = 0.41421 in integers.
+      std::int64_t dx = 0, dy = 0;
+      if (std::int64_t{ay} * 100000 <= std::int64_t{ax} * 41421) {
+        dx = 1;  // gradient mostly horizontal
+      } else if (std::int64_t{ay} * 41421 >= std::int64_t{ax} * 100000) {
+        dy = 1;  // mostly vertical
+      } else {
+        dx = 1;
+        dy = (gx > 0) == (gy > 0) ? 1 : -1;
+      }
+      if (m < magnitude_at(image, x + dx, y + dy) || m <= magnitude_at(image, x - dx, y - dy)) continue;
+      bool keep = m >= high;
+      for (std::int64_t j = -1; j <= 1 && !keep; ++j)
+        for (std::int64_t i = -1; i <= 1 && !keep; ++i)
+          if ((i != 0 || j != 0) && magnitude_at(image, x + i, y + j) >= high) keep = true;
+      if (keep) emit(out, count, window, x, y);
+    }
+  }
+  return Status::kOk;
+}
+
 Status extract_features(const ImageView& image, const ImageWindow& window, table_format::DetectorKind kind,
                         std::uint16_t threshold, std::span<RoiPoint> out, FeatureCount& count) noexcept {
   switch (kind) {
     case table_format::DetectorKind::kBinary: return extract_binary(image, window, out, count);
     case table_format::DetectorKind::kGradientRows:
       return extract_gradient_rows(image, window, threshold, out, count);
+    case table_format::DetectorKind::kCanny: return extract_canny(image, window, threshold, out, count);
   }
   return Status::kInvalidArgument;
 }

@@ -23,7 +23,7 @@ bool valid(const MotionFilterParams& p) noexcept {
   return unit(p.high_ratio) && unit(p.low_ratio) && p.low_ratio <= p.high_ratio && unit(p.high_margin) &&
          unit(p.reference_gain) && unit(p.k1) &&
          unit(p.k2) && unit(p.k3) && nonneg(p.u1) && nonneg(p.u2) && nonneg(p.gate_px) && nonneg(p.lost_uncertainty_px) &&
-         p.candidates >= 1 && p.candidates <= kMaxCandidates;
+         p.candidates >= 1 && p.candidates <= kMaxCandidates && nonneg(p.depth_switch_margin);
 }
 
 }  // namespace gabarit

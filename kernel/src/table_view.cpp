@@ -103,7 +103,7 @@ Status TableView::open(std::span<const std::byte> bytes, TableView& out) noexcep
   }
   if (cell_count == 0 || roi_width == 0 || roi_height == 0 || depth_count == 0) return Status::kBadHeaderField;
   if (reference_bytes != table_format::narrowest_reference_bytes(cell_count)) return Status::kBadHeaderField;
-  if (detector > static_cast<std::uint8_t>(table_format::DetectorKind::kGradientRows)) {
+  if (detector > static_cast<std::uint8_t>(table_format::DetectorKind::kCanny)) {
     return Status::kBadHeaderField;
   }
   std::uint32_t cells_x = 0, cells_y = 0, cells_theta = 0;

@@ -90,6 +90,22 @@ Status TrackingSession::track_fine(const ImageView& image, SessionScratch scratc
       break;
     }
   }
+  // Depth changes slowly: a cell of another depth must beat the best cell of
+  // the current depth by depth_switch_margin (relative) to change it.
+  if (chosen < n && fine_.cell(candidates[chosen].cell).depth != pose_.depth && pose_.depth < fine_.depth_count()) {
+    const std::uint32_t per_depth = fine_.cell_count() / fine_.depth_count();
+    CellScore same{kNoCell, 0, 0};
+    for (std::uint32_t c = pose_.depth * per_depth; c < (pose_.depth + 1u) * per_depth; ++c) {
+      const CellScore s{c, scratch.fine.counters[c], fine_.stencil_size(c)};
+      if (same.cell == kNoCell || ranks_before(s, same)) same = s;
+    }
+    const Pose p = pose_of_cell(fine_, same.cell, predicted, cx, cy);
+    const float dx = p.x - predicted.x, dy = p.y - predicted.y;
+    if (same.votes > 0 && dx * dx + dy * dy <= gate * gate &&
+        normalised_score(candidates[chosen]) < (1.0f + options_.filter.depth_switch_margin) * normalised_score(same)) {
+      candidates[chosen] = same;
+    }
+  }
   Confidence confidence = Confidence::kNone;
   if (chosen < n) {
     out.score = normalised_score(candidates[chosen]);

@@ -108,3 +108,55 @@ TEST(Features, RejectsBadArguments) {
 
 }  // namespace
 }  // namespace gabarit
+
+namespace gabarit {
+namespace {
+
+// A vertical step edge of height 120 between columns 9 and 10 of a 20x12 image.
+host::GrayImage step_edge(std::uint8_t left, std::uint8_t right) {
+  host::GrayImage img(20, 12);
+  for (std::uint32_t y = 0; y < 12; ++y)
+    for (std::uint32_t x = 0; x < 20; ++x) img.at(x, y) = x < 10 ? left : right;
+  return img;
+}
+
+TEST(Canny, AStepEdgeGivesOnePixelWideLineAfterNonMaximumSuppression) {
+  const host::GrayImage img = step_edge(20, 140);
+  std::vector<RoiPoint> out(240);
+  FeatureCount n;
+  ASSERT_EQ(extract_canny(img.view(), {0, 0, 20, 12}, 200, out, n), Status::kOk);
+  // Sobel responds on both columns 9 and 10 equally; NMS keeps one per row
+  // (m >= the neighbour ahead, > the one behind), the interior rows 1..10.
+  ASSERT_EQ(n.written, 10u);
+  for (std::uint32_t i = 0; i < n.written; ++i) {
+    EXPECT_EQ(out[i].col, out[0].col);
+    EXPECT_EQ(out[i].row, i + 1);
+  }
+  EXPECT_TRUE(out[0].col == 9 || out[0].col == 10);
+}
+
+TEST(Canny, WeakEdgesSurviveOnlyNextToStrongOnes) {
+  // Magnitude of a step of h grey levels is 4h: a 40-level step gives 160.
+  const host::GrayImage weak = step_edge(100, 140);
+  std::vector<RoiPoint> out(240);
+  FeatureCount n;
+  ASSERT_EQ(extract_canny(weak.view(), {0, 0, 20, 12}, 300, out, n), Status::kOk);  // low = 150 <= 160 < 300 = high
+  EXPECT_EQ(n.written, 0u) << "a weak edge with no strong neighbour is not an edge";
+  host::GrayImage mixed = weak;
+  for (std::uint32_t x = 10; x < 20; ++x) mixed.at(x, 6) = 220;  // one row makes a strong edge there
+  ASSERT_EQ(extract_canny(mixed.view(), {0, 0, 20, 12}, 300, out, n), Status::kOk);
+  bool strong_row = false, neighbour_row = false, far_row = false;
+  for (std::uint32_t i = 0; i < n.written; ++i) {
+    strong_row |= out[i].row == 6;
+    neighbour_row |= out[i].row == 5 || out[i].row == 7;
+    far_row |= out[i].row == 2;
+  }
+  EXPECT_TRUE(strong_row);
+  EXPECT_TRUE(neighbour_row) << "weak pixels next to the strong ones are kept (one step of hysteresis)";
+  EXPECT_FALSE(far_row);
+  EXPECT_EQ(extract_canny(weak.view(), {0, 0, 20, 12}, 1, out, n), Status::kInvalidArgument);
+  EXPECT_EQ(extract_features(weak.view(), {0, 0, 20, 12}, table_format::DetectorKind::kCanny, 300, out, n), Status::kOk);
+}
+
+}  // namespace
+}  // namespace gabarit

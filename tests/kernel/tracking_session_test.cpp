@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <bit>
 #include <cstring>
 #include <vector>
 
@@ -114,7 +115,11 @@ TEST(TrackingSession, PlainSessionIsTrackStepFrameForFrame) {
     if (plain.state != TrackState::kLost) pose = plain.pose;
     SessionResult r;
     ASSERT_EQ(session.step(frame.view(), {b.view(), {}}, r), Status::kOk);
-    EXPECT_EQ(std::memcmp(&r.pose, &pose, sizeof pose), 0) << "frame " << f;
+    // Bit for bit (Pose has padding, so field by field).
+    EXPECT_EQ(std::bit_cast<std::uint32_t>(r.pose.x), std::bit_cast<std::uint32_t>(pose.x)) << "frame " << f;
+    EXPECT_EQ(std::bit_cast<std::uint32_t>(r.pose.y), std::bit_cast<std::uint32_t>(pose.y)) << "frame " << f;
+    EXPECT_EQ(std::bit_cast<std::uint32_t>(r.pose.theta_deg), std::bit_cast<std::uint32_t>(pose.theta_deg)) << "frame " << f;
+    EXPECT_EQ(r.pose.depth, pose.depth) << "frame " << f;
     EXPECT_EQ(r.step.best.cell, plain.best.cell);
     EXPECT_EQ(r.state, plain.state);
   }

@@ -168,7 +168,7 @@ int run_microscope(const std::string& dir, bool quick) {
   const double build_fine_ms = micros_since(t0) / 1000;
   TableView table;
   if (TableView::open(table_bytes, table) != Status::kOk) throw host::Error("microscope: fine table invalid");
-  md << "Fine table: x, y -4..4 px in 1-px cells, theta -1.5..1.5 deg in 0.5-deg cells, " << so.depths << " depths = "
+  md << "Fine table (gradient-rows detector unless said): x, y -4..4 px in 1-px cells, theta -1.5..1.5 deg in 0.5-deg cells, " << so.depths << " depths = "
      << table.cell_count() << " cells, " << table.reference_count() << " references, " << table_bytes.size() << " bytes, "
      << model.depths[0].size() << " model features at depth 0 (gradient detector, threshold " << model.detector.threshold
      << " from the model), built in " << fmt(build_fine_ms) << " ms.\n\n";
@@ -196,6 +196,26 @@ int run_microscope(const std::string& dir, bool quick) {
   refine_only.refine = true;
   track("gabarit + sub-cell refinement", refine_only);
   track("gabarit + motion filter + refinement + recovery", SessionOptions{});
+  // The same with the Canny variant as detector (model and frames).
+  host::ImageModelOptions canny_options;
+  canny_options.canny = true;
+  const std::vector<std::byte> canny_bytes = host::build_table(host::model_from_images(model_paths, canny_options), bo);
+  TableView canny_table;
+  if (TableView::open(canny_bytes, canny_table) != Status::kOk) throw host::Error("microscope: Canny table invalid");
+  {
+    host::TrackingOptions options;
+    options.session = SessionOptions{};
+    Run r{"the same, Canny variant detector", {}, 0, {}};
+    MemoryFrames src(frames);
+    double total = 0;
+    host::run_tracking(canny_table, src, init, options, [&](const host::TrackRow& row) {
+      r.poses.push_back({row.frame, row.step.pose.x, row.step.pose.y, row.step.pose.theta_deg, row.step.pose.depth, true});
+      total += row.micros;
+      r.micros.push_back(row.micros);
+    });
+    r.mean_us = total / static_cast<double>(frames.size());
+    runs.push_back(r);
+  }
   {
     NccBank ncc(model_images, 4, 0.5, 3);
     Run r{"OpenCV NCC bank (TM_CCOEFF_NORMED, same 4-DOF window)", {}, 0, {}};
@@ -249,7 +269,7 @@ int run_microscope(const std::string& dir, bool quick) {
       t.y.push_back(axis[0] == 'x' ? p.x : p.theta_deg);
     }
     series.push_back(t);
-    for (std::size_t i : {std::size_t{0}, std::size_t{2}, std::size_t{3}}) {
+    for (std::size_t i : {std::size_t{0}, std::size_t{2}, runs.size() - 1}) {
       svg::Series s{runs[i].name, {}, {}};
       for (const auto& p : runs[i].poses) {
         s.x.push_back(p.frame);

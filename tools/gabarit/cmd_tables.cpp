@@ -47,6 +47,8 @@ int tables_build(const std::vector<std::string>& argv) {
               "                          or each with the same probability (for coarse recovery tables at a few percent)"},
              {"--seed", "N", "decimation seed (default 1)"},
              {"--binary", "", "binary detector: a non-zero pixel is a feature (model images and frames)"},
+             {"--detector", "gradient-rows|canny", "edge detector for grey images (default gradient-rows, the thesis's fast\n"
+              "                          one; canny: non-maximum suppression and a double threshold, threshold/2..threshold)"},
              {"--threshold", "N", "gradient detector threshold 1..2040 (default: a quarter of the model's strongest edge)"},
              {"-o", "OUT", "output table file", false, true}},
             "IMG.pgm");
@@ -64,6 +66,10 @@ int tables_build(const std::vector<std::string>& argv) {
   if (has_images) {
     host::ImageModelOptions mo;
     mo.binary = args.has("--binary");
+    const std::string detector = args.get_or("--detector", "gradient-rows");
+    if (detector != "gradient-rows" && detector != "canny") throw UsageError("--detector '" + detector + "': want gradient-rows or canny");
+    if (mo.binary && args.has("--detector")) throw UsageError("--detector has no meaning with --binary");
+    mo.canny = detector == "canny";
     mo.threshold = static_cast<int>(args.integer("--threshold", -1, 1, kMaxGradientMagnitude));
     if (mo.binary && args.has("--threshold")) throw UsageError("--threshold has no meaning with --binary");
     if (args.has("--ref")) {
@@ -83,7 +89,8 @@ int tables_build(const std::vector<std::string>& argv) {
       model.detector.kind = table_format::DetectorKind::kBinary;
       if (args.has("--threshold")) throw UsageError("--threshold has no meaning with --binary");
     } else if (args.has("--threshold")) {
-      model.detector.kind = table_format::DetectorKind::kGradientRows;
+      model.detector.kind = args.get_or("--detector", "gradient-rows") == "canny" ? table_format::DetectorKind::kCanny
+                                                                               : table_format::DetectorKind::kGradientRows;
       model.detector.threshold = static_cast<std::uint16_t>(args.integer("--threshold", 1, 1, kMaxGradientMagnitude));
     } else {
       throw UsageError("--model-points: say which detector frames need: --binary or --threshold N");

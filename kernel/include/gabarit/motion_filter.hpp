@@ -18,7 +18,9 @@
 // The ROI of the next frame is centred on pose + v. The n best cells are taken
 // in rank order and the first whose position lies within gate_px +
 // uncertainty of the prediction is chosen; a better-ranked cell outside the
-// gate is a distractor and is skipped. When the uncertainty passes
+// gate is a distractor and is skipped. The depth has inertia too: the chosen
+// cell changes it only if it beats the current depth's best cell by
+// depth_switch_margin. When the uncertainty passes
 // lost_uncertainty_px the target is lost and recovery takes over
 // (tracking_session.hpp).
 #pragma once
@@ -43,6 +45,9 @@ struct MotionFilterParams {
   float gate_px = 8.0f;
   float lost_uncertainty_px = 12.0f;
   std::uint8_t candidates = 4;  // 1..kMaxCandidates
+  // A cell of another focus-stack depth replaces the current depth only if its
+  // score beats the current depth's best cell by this fraction.
+  float depth_switch_margin = 0.1f;
 };
 inline constexpr std::uint8_t kMaxCandidates = 16;
 

@@ -53,7 +53,7 @@ Status open_vectors(std::span<const std::byte> bytes, VectorSet& out) noexcept {
     return Status::kBadHeaderField;
   }
   const std::uint8_t kind = std::to_integer<std::uint8_t>(p[20]);
-  if (kind > static_cast<std::uint8_t>(table_format::DetectorKind::kGradientRows)) return Status::kBadHeaderField;
+  if (kind > static_cast<std::uint8_t>(table_format::DetectorKind::kCanny)) return Status::kBadHeaderField;
   set.detector.kind = static_cast<table_format::DetectorKind>(kind);
   set.detector.threshold = load_le<std::uint16_t>(p + 22);
   set.init.x = load_le<float>(p + 24);

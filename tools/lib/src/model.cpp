@@ -52,7 +52,9 @@ std::uint16_t default_gradient_threshold(std::uint16_t strongest_magnitude) {
 ModelStack model_from_images(const std::vector<std::string>& paths, const ImageModelOptions& options) {
   if (paths.empty()) throw Error("no model image given");
   ModelStack model;
-  model.detector.kind = options.binary ? table_format::DetectorKind::kBinary : table_format::DetectorKind::kGradientRows;
+  model.detector.kind = options.binary  ? table_format::DetectorKind::kBinary
+                        : options.canny ? table_format::DetectorKind::kCanny
+                                        : table_format::DetectorKind::kGradientRows;
   std::int32_t ref_x = options.ref_x, ref_y = options.ref_y;
   for (std::size_t i = 0; i < paths.size(); ++i) {
     const GrayImage image = read_pgm(paths[i]);
@@ -77,6 +79,7 @@ ModelStack model_from_images(const std::vector<std::string>& paths, const ImageM
               strongest = std::max(strongest, gradient_magnitude(image.view(), x, y));
           if (strongest == 0) throw Error(paths[i] + ": flat image, no edges to build a model from");
           model.detector.threshold = default_gradient_threshold(strongest);
+          if (options.canny && model.detector.threshold < 2) model.detector.threshold = 2;  // its low threshold is half
         }
       }
     } else if (image.width != model.image_width || image.height != model.image_height) {

@@ -8,7 +8,12 @@ namespace gabarit::host {
 namespace {
 
 const char* detector_name(table_format::DetectorKind k) {
-  return k == table_format::DetectorKind::kBinary ? "binary" : "gradient-rows";
+  switch (k) {
+    case table_format::DetectorKind::kBinary: return "binary";
+    case table_format::DetectorKind::kGradientRows: return "gradient-rows";
+    case table_format::DetectorKind::kCanny: return "canny";
+  }
+  return "unknown";
 }
 
 void axis_json(std::ostringstream& o, const char* name, const Axis& a) {

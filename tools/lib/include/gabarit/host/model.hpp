@@ -39,6 +39,7 @@ void write_points_csv(const std::string& path, const std::vector<Point>& points)
 
 struct ImageModelOptions {
   bool binary = false;            // non-zero pixel = feature
+  bool canny = false;             // the Canny variant instead of gradient rows (same threshold rule)
   int threshold = -1;             // gradient threshold; -1 = derive from the first image
   bool has_ref = false;           // reference point given (else image centre, floor(w/2), floor(h/2))
   std::int32_t ref_x = 0, ref_y = 0;
