@@ -24,6 +24,14 @@ TEST(Stencil, IntegerTranslationsAreTheIntegersInsideOrTheClosest) {
   EXPECT_EQ(host::integer_translations(-1.0f, 1.0f).last, 1);
   EXPECT_EQ(host::integer_translations(2.2f, 2.8f).first, 3);  // no integer inside: closest to 2.5 (half away)
   EXPECT_EQ(host::integer_translations(2.2f, 2.4f).first, 2);
+  // The other policy: the smallest enclosing integer range.
+  using host::TranslationPolicy;
+  EXPECT_EQ(host::integer_translations(2.2f, 2.8f, TranslationPolicy::kEnclosing).first, 2);
+  EXPECT_EQ(host::integer_translations(2.2f, 2.8f, TranslationPolicy::kEnclosing).last, 3);
+  EXPECT_EQ(host::integer_translations(-0.5f, 0.5f, TranslationPolicy::kEnclosing).first, -1);
+  EXPECT_EQ(host::integer_translations(-0.5f, 0.5f, TranslationPolicy::kEnclosing).last, 1);
+  EXPECT_EQ(host::integer_translations(-1.0f, 1.0f, TranslationPolicy::kEnclosing).first, -1);
+  EXPECT_EQ(host::integer_translations(-1.0f, 1.0f, TranslationPolicy::kEnclosing).last, 1);
   EXPECT_EQ(host::integer_translations(-1.75f, 1.75f).first, -1);
   EXPECT_EQ(host::integer_translations(-1.75f, 1.75f).last, 1);
 }

@@ -45,6 +45,8 @@ int tables_build(const std::vector<std::string>& argv) {
              {"--keep", "RATIO", "fraction of stencil references kept by decimation, (0,1] (default 1)"},
              {"--decimation", "overlap|uniform", "which references go: the most overlapped first (the thesis's, default)\n"
               "                          or each with the same probability (for coarse recovery tables at a few percent)"},
+             {"--translations", "inside|enclosing", "integer translations of a cell with non-integer bounds: those inside\n"
+              "                          it, else the closest (default), or the smallest enclosing range (docs/tracking.md)"},
              {"--seed", "N", "decimation seed (default 1)"},
              {"--binary", "", "binary detector: a non-zero pixel is a feature (model images and frames)"},
              {"--detector", "gradient-rows|canny", "edge detector for grey images (default gradient-rows, the thesis's fast\n"
@@ -104,6 +106,11 @@ int tables_build(const std::vector<std::string>& argv) {
   bo.keep = args.number("--keep", 1.0, 0.0, 1.0);
   if (!(bo.keep > 0)) throw UsageError("--keep must be above 0");
   bo.seed = static_cast<std::uint64_t>(args.integer("--seed", 1, 0, INT64_MAX));
+  if (const std::string t = args.get_or("--translations", "inside"); t == "enclosing") {
+    bo.translations = host::TranslationPolicy::kEnclosing;
+  } else if (t != "inside") {
+    throw UsageError("--translations '" + t + "': want inside or enclosing");
+  }
   if (const std::string d = args.get_or("--decimation", "overlap"); d == "uniform") {
     bo.decimation = host::Decimation::kUniform;
   } else if (d != "overlap") {

@@ -7,7 +7,9 @@
 
 namespace gabarit::host {
 
-IntegerRange integer_translations(float lo, float hi) {
+IntegerRange integer_translations(float lo, float hi, TranslationPolicy policy) {
+  if (policy == TranslationPolicy::kEnclosing)
+    return {static_cast<std::int32_t>(std::floor(lo)), static_cast<std::int32_t>(std::ceil(hi))};
   const auto first = static_cast<std::int32_t>(std::ceil(lo));
   const auto last = static_cast<std::int32_t>(std::floor(hi));
   if (first <= last) return {first, last};
@@ -38,9 +40,9 @@ std::vector<Point> swept_arcs(const std::vector<Point>& points, float theta_lo_d
   return out;
 }
 
-std::vector<Point> translate_sweep(const std::vector<Point>& arcs, const CellBounds& cell) {
-  const IntegerRange tx = integer_translations(cell.x_lo, cell.x_hi);
-  const IntegerRange ty = integer_translations(cell.y_lo, cell.y_hi);
+std::vector<Point> translate_sweep(const std::vector<Point>& arcs, const CellBounds& cell, TranslationPolicy policy) {
+  const IntegerRange tx = integer_translations(cell.x_lo, cell.x_hi, policy);
+  const IntegerRange ty = integer_translations(cell.y_lo, cell.y_hi, policy);
   std::vector<Point> out;
   if (arcs.empty()) return out;
   if (tx.first == tx.last && ty.first == ty.last) {

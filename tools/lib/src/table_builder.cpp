@@ -59,7 +59,7 @@ std::vector<std::byte> build_table(const ModelStack& model, const BuildOptions& 
         u.theta_hi_deg != cells[c - 1].theta_hi_deg) {
       arcs = swept_arcs(model.depths[u.depth], u.theta_lo_deg, u.theta_hi_deg);
     }
-    stencils[c] = translate_sweep(arcs, u);
+    stencils[c] = translate_sweep(arcs, u, options.translations);
     for (const Point& p : stencils[c]) {
       min_x = std::min<std::int64_t>(min_x, p.x);
       max_x = std::max<std::int64_t>(max_x, p.x);

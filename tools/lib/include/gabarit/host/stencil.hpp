@@ -27,14 +27,23 @@ struct IntegerRange {
   std::int32_t first = 0;
   std::int32_t last = 0;  // inclusive
 };
-IntegerRange integer_translations(float lo, float hi);
+// The two policies the thesis discusses for a cell's non-integer bounds:
+//   kInsideElseClosest  the integers inside [lo, hi], else the one closest to
+//                       the centre (the default: see docs/tracking.md for the
+//                       measurement that chose it);
+//   kEnclosing          the smallest integer range enclosing [lo, hi],
+//                       floor(lo)..ceil(hi): neighbouring cells share their
+//                       boundary translations, stencils grow.
+enum class TranslationPolicy { kInsideElseClosest, kEnclosing };
+IntegerRange integer_translations(float lo, float hi, TranslationPolicy policy = TranslationPolicy::kInsideElseClosest);
 
 // Step 1: the de-duplicated, sorted arc pixels of all points over [lo, hi] degrees.
 std::vector<Point> swept_arcs(const std::vector<Point>& points, float theta_lo_deg, float theta_hi_deg);
 
 // Step 2: `arcs` (sorted, without duplicates) swept over the cell's integer
 // translations, sorted by (x, y) and without duplicates.
-std::vector<Point> translate_sweep(const std::vector<Point>& arcs, const CellBounds& cell);
+std::vector<Point> translate_sweep(const std::vector<Point>& arcs, const CellBounds& cell,
+                                   TranslationPolicy policy = TranslationPolicy::kInsideElseClosest);
 
 // Steps 1 and 2: the stencil of `cell` for `points` (the features of the
 // cell's depth), sorted by (x, y) and without duplicates. The table builder

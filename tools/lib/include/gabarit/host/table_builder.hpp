@@ -11,6 +11,7 @@
 
 #include "gabarit/host/decimation.hpp"
 #include "gabarit/host/model.hpp"
+#include "gabarit/host/stencil.hpp"
 #include "gabarit/host/state_space.hpp"
 
 namespace gabarit::host {
@@ -19,6 +20,7 @@ struct BuildOptions {
   StateSpace space;      // space.depths is taken from the model
   double keep = 1.0;     // fraction of references kept by decimation
   Decimation decimation = Decimation::kOverlap;
+  TranslationPolicy translations = TranslationPolicy::kInsideElseClosest;
   std::uint64_t seed = 1;
   // Called now and then with (cells done, cells total) while stencils are built.
   std::function<void(std::size_t, std::size_t)> progress;
