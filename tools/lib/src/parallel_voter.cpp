@@ -22,8 +22,8 @@ void relax(int& spins) {
 
 }  // namespace
 
-ParallelVoter::ParallelVoter(unsigned threads)
-    : threads_(threads == 0 ? 1 : threads), votes_(threads_, 0), status_(threads_, Status::kOk) {
+ParallelVoter::ParallelVoter(unsigned threads, Split split)
+    : threads_(threads == 0 ? 1 : threads), split_(split), private_(threads_), votes_(threads_, 0), status_(threads_, Status::kOk) {
   if (threads == 0 || threads > 256) throw Error("parallel voter: threads must be in 1..256");
   for (unsigned i = 1; i < threads_; ++i) workers_.emplace_back([this, i] { work(i); });
 }
@@ -34,6 +34,21 @@ ParallelVoter::~ParallelVoter() {
 }
 
 void ParallelVoter::run_range(unsigned index) {
+  if (split_ == Split::kFeatures) {
+    // Thread i of n takes features [size * i / n, size * (i + 1) / n); thread 0
+    // votes into the caller's counters, the others into their own.
+    const std::size_t size = features_.size();
+    const auto part = features_.subspan(size * index / threads_, size * (index + 1) / threads_ - size * index / threads_);
+    std::span<VoteCounter> counters = counters_;
+    if (index > 0) {
+      private_[index].assign(counters_.size(), 0);
+      counters = private_[index];
+    }
+    VoteTally tally;
+    status_[index] = accumulate_votes(*table_, part, counters, tally);
+    votes_[index] = tally.votes;
+    return;
+  }
   // Thread i of n takes cells [cells * i / n, cells * (i + 1) / n).
   const std::uint32_t cells = table_->cell_count();
   const auto begin = static_cast<std::uint32_t>(std::uint64_t{cells} * index / threads_);
@@ -72,6 +87,15 @@ Status ParallelVoter::accumulate(const TableView& table, std::span<const RoiPoin
   for (unsigned i = 0; i < threads_; ++i) {
     if (status_[i] != Status::kOk) return status_[i];
     votes += votes_[i];
+  }
+  if (split_ == Split::kFeatures) {
+    for (unsigned i = 1; i < threads_; ++i) {
+      const std::vector<VoteCounter>& part = private_[i];
+      for (std::size_t c = 0; c < counters.size(); ++c) {
+        const std::uint32_t sum = std::uint32_t{counters[c]} + part[c];
+        counters[c] = static_cast<VoteCounter>(sum > kVoteCounterMax ? kVoteCounterMax : sum);
+      }
+    }
   }
   tally.votes += votes;
   tally.features += static_cast<std::uint32_t>(features.size());
