@@ -79,4 +79,20 @@ printf 'YUV4MPEG2 W8 H8 C422\nFRAME\n' > "$work/c422.y4m"
 expect 1 "C422 not supported" $g track --table "$work/a.gbt" --frames "$work/c422.y4m" --init 1,1
 printf 'YUV4MPEG2 W8 H8 Cmono\nFRAME\nabc' > "$work/cut.y4m"
 expect 1 "frame 0: truncated" $g track --table "$work/a.gbt" --frames "$work/cut.y4m" --init 1,1
+# The grayscale 4-DOF scene end to end: model stack, table, filtered tracking.
+s="$work/scene"
+$g synth --scene microscope --frames 40 --depths 2 --occlusion 15:6 -o "$s" 2>/dev/null || fail "synth --scene"
+[ -f "$s/model_00.pgm" ] && [ -f "$s/model_01.pgm" ] || fail "synth --scene: model stack missing"
+$g tables build --model "$s/model_00.pgm" --model "$s/model_01.pgm" --x -4:4:9 --y -4:4:9 --theta -1.5:1.5:7 \
+  -o "$s/t.gbt" 2>/dev/null || fail "tables build from the scene's model stack"
+$g tables inspect "$s/t.gbt" > "$s/t.json" && grep -q '"depths": 2' "$s/t.json" || fail "scene table depths"
+init=$(sed -n 2p "$s/gt.csv" | cut -d, -f2-5)
+$g track --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init" --motion-filter --refine --recover -o "$s/p.csv" 2>/dev/null \
+  || fail "track --motion-filter --refine --recover"
+$g eval --gt "$s/gt.csv" --poses "$s/p.csv" > "$s/acc.json" || fail "eval on the scene"
+grep -q '"frames": 34' "$s/acc.json" || fail "scene: 34 visible frames expected: $(cat "$s/acc.json")"
+grep -q '"reacquired_after_frames": \[[0-9]' "$s/acc.json" || fail "scene: not reacquired after the occlusion: $(cat "$s/acc.json")"
+expect 2 "applies to --scene" $g synth --shape curve --depths 3 -o "$work/x"
+expect 2 "one of --shape and --scene" $g synth -o "$work/x"
+expect 2 "--translations" $g tables build --model "$s/model_00.pgm" --x 0:0:1 --y 0:0:1 --translations middle -o "$work/x.gbt"
 echo "1 passed, 0 failed"
