@@ -23,6 +23,7 @@
 #include "gabarit/crc32.hpp"
 #include "gabarit/host/mapped_file.hpp"
 #include "gabarit/host/tracking_run.hpp"
+#include "gabarit/tracking_session.hpp"
 #include "gpio_lines.hpp"
 #include "luma.hpp"
 #include "udp_sender.hpp"
@@ -50,6 +51,7 @@ struct Config {
   int reopen_max_ms = 2000;            // back-off ceiling between reopen attempts
   bool frame_crc = false;
   bool quiet = false;
+  SessionOptions session = kPlainSession;
 };
 
 std::uint32_t parse_format(const std::string& text) {
@@ -74,6 +76,9 @@ Config parse(int argc, char** argv, bool& help_shown) {
        {"--size", "WxH", "frame size to request (default: the device's current size)"},
        {"--binary", "", "binary detector on frames whatever the table says"},
        {"--voter", "auto|csr|dense", "voting method; results are identical (default auto)"},
+       {"--motion-filter", "", "predict the ROI, gate candidates, grade confidence (as gabarit track)"},
+       {"--refine", "", "sub-cell x, y, theta (as gabarit track)"},
+       {"--recover", "", "once lost, search around the last confident pose (as gabarit track)"},
        {"--frames", "N", "stop after N tracked frames (default: run until signalled)"},
        {"--frame-timeout-ms", "MS", "report a stall after MS without a frame (default 2000)"},
        {"--reopen-min-ms", "MS", "wait after losing the device before reopening it; doubles per failed attempt (default 250)"},
@@ -123,6 +128,9 @@ Config parse(int argc, char** argv, bool& help_shown) {
   c.start_stopped = args.has("--start-stopped");
   if (c.start_stopped && c.gpio.trigger_line < 0) throw cli::UsageError("--start-stopped needs --trigger-line");
   c.frame_crc = args.has("--frame-crc");
+  c.session.motion_filter = args.has("--motion-filter");
+  c.session.refine = args.has("--refine");
+  c.session.recover = args.has("--recover");
   c.quiet = args.has("--quiet");
   return c;
 }
@@ -137,9 +145,14 @@ std::uint32_t luma_crc32(const ImageView& image) {
 class Board {
  public:
   Board(const Config& c, const TableView& table, int signal_fd)
-      : c_(c), table_(table), signal_fd_(signal_fd), buffers_(table, c.voter), running_(!c.start_stopped) {
-    pose_ = cli::parse_init_pose(c.init_text, table, "--init");
-    if (c.binary) detector_ = Detector{table_format::DetectorKind::kBinary, 0};
+      : c_(c),
+        table_(table),
+        signal_fd_(signal_fd),
+        buffers_(table, c.voter),
+        session_(table, nullptr, c.binary ? Detector{table_format::DetectorKind::kBinary, 0} : detector_of(table)),
+        running_(!c.start_stopped) {
+    if (session_.start(c.session, cli::parse_init_pose(c.init_text, table, "--init")) != Status::kOk)
+      throw cli::UsageError("--init: not a usable starting pose");
   }
 
   int run() {
@@ -278,13 +291,13 @@ class Board {
     }
     host::TrackRow row;
     row.frame = static_cast<std::uint32_t>(tracked_);
-    const Detector detector = detector_.value_or(detector_of(table_));
-    if (const Status s = track_step(table_, detector, image, pose_, buffers_.scratch(), row.step); s != Status::kOk) {
+    SessionResult result;
+    if (const Status s = session_.step(image, {buffers_.scratch(), {}}, result); s != Status::kOk) {
       ++bad_frames_;
       progress("frame %u not tracked: %s", frame.sequence, status_name(s));
       return;
     }
-    pose_ = row.step.pose;
+    host::fill_row(row, result);  // the same row as gabarit track writes
     ++tracked_;
     char tail[64];
     int n = std::snprintf(tail, sizeof tail, ",%u,%llu", frame.sequence, ull(frame.timestamp_us));
@@ -301,8 +314,7 @@ class Board {
   const TableView& table_;
   int signal_fd_;
   host::TrackerBuffers buffers_;
-  std::optional<Detector> detector_;
-  Pose pose_;
+  TrackingSession session_;
   board::V4l2Capture capture_;
   board::GpioLines gpio_;
   board::UdpSender udp_;

@@ -71,14 +71,18 @@ void run_tracking(const TableView& table, FrameSource& frames, const Pose& init,
     }
     row.frame = index;
     row.micros = std::chrono::duration<double, std::micro>(stop - start).count();
-    row.step = result.step;
-    row.step.pose = result.pose;
-    row.step.state = result.state;
-    row.step.score = result.score;
-    row.confidence = result.confidence;
-    row.reacquired = result.reacquired;
+    fill_row(row, result);
     on_row(row);
   }
+}
+
+void fill_row(TrackRow& row, const SessionResult& result) {
+  row.step = result.step;
+  row.step.pose = result.pose;
+  row.step.state = result.state;
+  row.step.score = result.score;
+  row.confidence = result.confidence;
+  row.reacquired = result.reacquired;
 }
 
 std::string pose_csv_row(const TrackRow& row) {

@@ -68,6 +68,10 @@ inline void run_tracking(const TableView& table, FrameSource& frames, const Pose
   run_tracking(table, frames, init, options, on_row);
 }
 
+// A session's frame as a row: the vote, with the session's pose, state,
+// score and confidence (what `gabarit track` and gabarit-board print).
+void fill_row(TrackRow& row, const SessionResult& result);
+
 // One CSV line "frame,x,y,theta_deg,depth,votes,score,status" (no newline).
 std::string pose_csv_row(const TrackRow& row);
 inline constexpr const char* kPoseCsvHeader = "frame,x,y,theta_deg,depth,votes,score,status";
