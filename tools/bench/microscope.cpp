@@ -18,6 +18,7 @@
 #include "gabarit/host/image_io.hpp"
 #include "gabarit/host/model.hpp"
 #include "gabarit/host/parallel_voter.hpp"
+#include "gabarit/host/rng.hpp"
 #include "gabarit/host/scene_synth.hpp"
 #include "gabarit/host/stencil.hpp"
 #include "gabarit/host/synth.hpp"
@@ -392,6 +393,69 @@ int run_microscope(const std::string& dir, bool quick) {
       md << "| " << (policy == host::TranslationPolicy::kEnclosing ? "smallest enclosing integer range" : "inside, else closest (default)")
          << " | " << t.reference_count() << " | " << fmt(100.0 * static_cast<double>(a.within_1px) / static_cast<double>(a.frames))
          << "% | " << fmt(a.mean_error_px, 2) << " |\n";
+    }
+    md << "\n";
+  }
+
+  // 7. The thesis's Fig. 6.6: pre-processing time, references stored and
+  // tracking time against the model's feature count, for four state spaces.
+  {
+    struct Setting {
+      const char* name;
+      const char* xy;
+      const char* theta;
+      int depths;
+    };
+    const Setting settings[] = {{"x, y +-5 px (121 cells)", "-5:5:11", "0:0:1", 1},
+                                {"+ theta +-2 deg in 1-deg cells (605)", "-5:5:11", "-2:2:5", 1},
+                                {"+ 4 depths (2,420)", "-5:5:11", "-2:2:5", 4},
+                                {"x, y +-10 px, theta, 4 depths (8,820)", "-10:10:21", "-2:2:5", 4}};
+    const std::vector<std::size_t> counts = quick ? std::vector<std::size_t>{250, 1000} : std::vector<std::size_t>{250, 500, 1000, 2000};
+    md << "## Complexity (thesis Fig. 6.6)\n\nBinary models (random closed curves), plain loop on 30 frames of the "
+          "model moving +-4 px with 5% noise; depth n is the model scaled by 1 + 0.01 n.\n\n"
+       << "| state space | features | build ms | references | table MB | us/frame |\n|---|---:|---:|---:|---:|---:|\n";
+    for (const Setting& st : settings) {
+      for (const std::size_t n : counts) {
+        host::ModelStack m;
+        const std::vector<host::Point> curve = host::random_closed_curve(n, 9);
+        for (int d = 0; d < st.depths; ++d) {
+          std::vector<host::Point> scaled;
+          for (const auto& p : curve)
+            scaled.push_back({static_cast<std::int32_t>(std::lround(p.x * (1 + 0.01 * d))), static_cast<std::int32_t>(std::lround(p.y * (1 + 0.01 * d)))});
+          std::sort(scaled.begin(), scaled.end());
+          scaled.erase(std::unique(scaled.begin(), scaled.end()), scaled.end());
+          m.depths.push_back(scaled);
+        }
+        host::BuildOptions b;
+        b.space.x = host::parse_axis(st.xy, "x");
+        b.space.y = host::parse_axis(st.xy, "y");
+        b.space.theta = host::parse_axis(st.theta, "theta");
+        const auto tb = Clock::now();
+        const std::vector<std::byte> bytes = host::build_table(m, b);
+        const double build_ms = micros_since(tb) / 1000;
+        TableView t;
+        if (TableView::open(bytes, t) != Status::kOk) throw host::Error("complexity: table invalid");
+        host::SynthOptions syn;
+        syn.shape = curve;
+        syn.frames = 30;
+        syn.noise = 0.05;
+        syn.seed = 4;
+        host::fit_image_to_shape(syn);
+        host::Rng rng(syn.seed);
+        std::vector<host::GrayImage> seq;
+        std::int32_t x = static_cast<std::int32_t>(syn.width / 2), y = static_cast<std::int32_t>(syn.height / 2);
+        const Pose start{static_cast<float>(x), static_cast<float>(y), 0, 0};
+        for (std::uint32_t f = 0; f < syn.frames; ++f) {
+          x += rng.uniform_int(-4, 4);
+          y += rng.uniform_int(-4, 4);
+          seq.push_back(host::render_frame(syn, x, y, syn.seed * 1000 + f));
+        }
+        MemoryFrames src(seq);
+        double total = 0;
+        host::run_tracking(t, src, start, std::nullopt, [&](const host::TrackRow& row) { total += row.micros; });
+        md << "| " << st.name << " | " << curve.size() << " | " << fmt(build_ms) << " | " << t.reference_count() << " | "
+           << fmt(static_cast<double>(bytes.size()) / 1e6, 2) << " | " << fmt(total / static_cast<double>(seq.size())) << " |\n";
+      }
     }
     md << "\n";
   }
