@@ -264,7 +264,10 @@ class Board {
       board::CapturedFrame frame;
       switch (capture_.dequeue(frame)) {
         case CaptureEvent::kNoFrame: return;
-        case CaptureEvent::kErrorFrame: ++error_frames_; continue;
+        case CaptureEvent::kErrorFrame:
+          ++error_frames_;
+          dropped_ += counter_.delivered(frame.sequence);  // keeps the sequence: a flagged frame is not a dropped one
+          continue;
         case CaptureEvent::kDeviceLost: device_lost(capture_.error()); return;
         case CaptureEvent::kFrame: break;
       }

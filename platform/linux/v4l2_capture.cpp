@@ -129,6 +129,8 @@ CaptureEvent V4l2Capture::dequeue(CapturedFrame& frame) {
     return CaptureEvent::kDeviceLost;
   }
   if ((buf.flags & V4L2_BUF_FLAG_ERROR) != 0) {
+    frame.sequence = buf.sequence;  // still a frame of the sequence: not a drop
+    frame.data = nullptr;
     if (!requeue(buf.index)) return CaptureEvent::kDeviceLost;
     return CaptureEvent::kErrorFrame;
   }

@@ -32,7 +32,7 @@ struct CapturedFrame {
 enum class [[nodiscard]] CaptureEvent {
   kFrame,        // `frame` is valid until requeue(frame.index)
   kNoFrame,      // nothing ready yet (EAGAIN)
-  kErrorFrame,   // the driver flagged a corrupted buffer; it has been requeued
+  kErrorFrame,   // the driver flagged a corrupted buffer; it has been requeued (only frame.sequence is set)
   kDeviceLost,   // the device is gone (unplugged, module unloaded): close and reopen
 };
 

@@ -70,6 +70,11 @@ sampler=$!
 gabarit-board $board_args --gpio-chip "$chip" --lock-line 0 --strobe-line 1 --strobe-us 8000 \
   > /tmp/poses.csv 2> /tmp/board.log &
 board=$!
+# Two captured buffers come back flagged V4L2_BUF_FLAG_ERROR: skipped, counted.
+sleep 2
+gabarit-vivid-feed error --capture /dev/video0 || fail "vivid error injection"
+sleep 0.5
+gabarit-vivid-feed error --capture /dev/video0 || fail "vivid error injection"
 wait $feed || fail "feeding frames"
 sleep 0.3
 kill -TERM $board
@@ -84,6 +89,7 @@ tracked=$(($(wc -l < /tmp/poses.csv) - 1))
 read rising lock_high samples < /tmp/sampled
 echo "virtual-board: $tracked frames tracked, $rising strobe pulses seen in $samples samples, lock high seen: $lock_high"
 [ "$tracked" -ge "$FRAMES" ] || fail "only $tracked frames tracked"
+grep -q " 2 flagged bad" /tmp/board.log || fail "the two error-flagged buffers were not skipped and counted"
 # A polled shell sees nearly every 8 ms pulse; demand 90% of the frames.
 [ $((rising * 10)) -ge $((tracked * 9)) ] && [ "$rising" -le "$tracked" ] || fail "strobe: $rising pulses for $tracked frames"
 [ "$lock_high" = 1 ] || fail "lock never went high while tracking"

@@ -12,6 +12,9 @@
 //       meanwhile begins on the recording's first frame
 //   gabarit-vivid-feed disconnect --capture /dev/video0
 //       vivid's Disconnect control: its device nodes go away as in an unplug
+//   gabarit-vivid-feed error --capture /dev/video0
+//       vivid's error injection: the next captured buffer is flagged
+//       V4L2_BUF_FLAG_ERROR
 //
 // vivid keeps showing the last queued output buffer until another is queued,
 // so a capture sees each frame one or more times; the test maps captured
@@ -40,6 +43,7 @@ namespace {
 constexpr std::uint32_t kVividCidLoopVideo = 0x00f0f025;
 constexpr std::uint32_t kVividCidOsdTextMode = 0x00f0f001;
 constexpr std::uint32_t kVividCidDisconnect = 0x00f0f041;
+constexpr std::uint32_t kVividCidDqbufError = 0x00f0f042;  // the next buffer comes back flagged V4L2_BUF_FLAG_ERROR
 constexpr int kOsdTextModeNone = 2;
 constexpr int kSvideoInput = 2;  // with vivid's default input_types 0xe4
 constexpr int kSvideoOutput = 0; // with vivid's default output_types 0x02
@@ -180,13 +184,18 @@ int main(int argc, char** argv) {
     if (args.empty() || args[0] == "--help") {
       std::fputs("usage: gabarit-vivid-feed setup --capture DEV --output DEV --size WxH\n"
                  "       gabarit-vivid-feed play --output DEV --frames SEQ.y4m [--hold-ms MS] [--first-hold-ms MS]\n"
-                 "       gabarit-vivid-feed disconnect --capture DEV\n",
+                 "       gabarit-vivid-feed disconnect --capture DEV\n"
+                 "       gabarit-vivid-feed error --capture DEV\n",
                  args.empty() ? stderr : stdout);
       return args.empty() ? 2 : 0;
     }
     if (args[0] == "setup") setup(args);
     else if (args[0] == "play") play(args);
-    else if (args[0] == "disconnect") {
+    else if (args[0] == "error") {
+      const int cap = open_device(option(args, "--capture", "/dev/video0"));
+      set_control(cap, kVividCidDqbufError, 1, "buffer error injection");
+      ::close(cap);
+    } else if (args[0] == "disconnect") {
       const int cap = open_device(option(args, "--capture", "/dev/video0"));
       set_control(cap, kVividCidDisconnect, 1, "disconnect");
       ::close(cap);
