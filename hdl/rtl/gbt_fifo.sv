@@ -49,6 +49,44 @@ module gbt_fifo #(
     if (do_push) mem_q[wr_q] <= wdata_i;
   end
 
+`ifdef FORMAL
+  // Proved by hdl/formal/fifo.sh with yosys-smtbmc (BMC and k-induction).
+  // The FIFO never looks at its data, so proving it with each word equal to
+  // its push's sequence number covers any data: every word comes out once,
+  // in the order it went in, and the occupancy is pushes minus pops.
+  logic [WidthBits-1:0] f_pushed_q, f_popped_q;
+  // The run starts in reset.
+  logic f_started_q = 1'b0;
+  always_ff @(posedge clk_i) f_started_q <= 1'b1;
+  always_comb if (!f_started_q) assume (!rst_ni);
+  always_ff @(posedge clk_i or negedge rst_ni) begin
+    if (!rst_ni) begin
+      f_pushed_q <= '0;
+      f_popped_q <= '0;
+    end else begin
+      if (do_push) f_pushed_q <= f_pushed_q + 1'b1;
+      if (do_pop) f_popped_q <= f_popped_q + 1'b1;
+    end
+  end
+  always_comb begin
+    if (rst_ni) begin
+      assume (wdata_i == f_pushed_q);
+      assert (used_q <= (PtrWidth + 1)'(Depth));
+      assert (f_pushed_q - f_popped_q == WidthBits'(used_q));  // at full width, not modulo the depth
+      assert (wr_q == PtrWidth'(rd_q + used_q[PtrWidth-1:0]));
+      if (!empty_o) assert (rdata_o == f_popped_q);
+    end
+  end
+  // Every occupied slot holds the word pushed that many places after the head.
+  genvar f_slot;
+  for (f_slot = 0; f_slot < Depth; f_slot = f_slot + 1) begin : g_f_slot
+    always_comb begin
+      if (rst_ni && (PtrWidth + 1)'(f_slot) < used_q)
+        assert (mem_q[PtrWidth'(rd_q + PtrWidth'(f_slot))] == f_popped_q + WidthBits'(f_slot));
+    end
+  end
+`endif
+
 `ifndef SYNTHESIS
   /* verilator lint_off SYNCASYNCNET */  // rst_ni only quiets the check during reset
   always_ff @(posedge clk_i) begin

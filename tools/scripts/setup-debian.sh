@@ -13,6 +13,7 @@ packages=(
   libgpiod-dev            # the board application's GPIO lines (libgpiod 1.6, the v1 API)
   linux-kbuild-6.1 cpio xz-utils  # the virtual board: gpio-sim built against the arm64 headers, its initramfs
   yosys nextpnr-ice40 fpga-icestorm  # hardware voter synthesis and place-and-route
+  z3                      # the SMT solver behind yosys-smtbmc (formal proof of the FIFO)
 )
 # The board application's libgpiod for the cross targets, from Debian's
 # multi-arch packages.
