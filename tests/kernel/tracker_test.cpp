@@ -15,14 +15,7 @@ using host::GrayImage;
 using testing::build;
 using testing::point_model;
 
-struct Scratch {
-  explicit Scratch(const TableView& t)
-      : features(tracker_feature_capacity(t)), counters(voter_counter_count(t.cell_count())), mask(tracker_mask_bytes(t)) {}
-  TrackerScratch view() { return {features, counters, mask}; }
-  std::vector<RoiPoint> features;
-  std::vector<VoteCounter> counters;
-  std::vector<std::uint8_t> mask;
-};
+using Scratch = testing::TrackerTestScratch;
 
 GrayImage draw(const std::vector<host::Point>& pts, float x, float y, float theta_deg, std::uint32_t size = 96) {
   GrayImage img(size, size);

@@ -11,6 +11,7 @@
 #include "gabarit/host/rng.hpp"
 #include "gabarit/host/table_builder.hpp"
 #include "gabarit/table_view.hpp"
+#include "gabarit/tracker.hpp"
 
 namespace gabarit::testing {
 
@@ -25,6 +26,16 @@ std::vector<std::byte> build(const host::ModelStack& model, const std::string& x
 
 // Opens a table and fails the current test if it does not validate.
 TableView open_table(std::span<const std::byte> bytes);
+
+// track_step's scratch for one table, sized by the kernel's formulas (CSR voter).
+struct TrackerTestScratch {
+  explicit TrackerTestScratch(const TableView& t)
+      : features(tracker_feature_capacity(t)), counters(voter_counter_count(t.cell_count())), mask(tracker_mask_bytes(t)) {}
+  TrackerScratch view() { return {features, counters, mask}; }
+  std::vector<RoiPoint> features;
+  std::vector<VoteCounter> counters;
+  std::vector<std::uint8_t> mask;
+};
 
 // Re-seals a deliberately edited table with a correct CRC, so structural
 // checks (not the CRC) are what rejects it.

@@ -179,13 +179,13 @@ int run_microscope(const std::string& dir, bool quick) {
   const Pose init{static_cast<float>(truth[0].x), static_cast<float>(truth[0].y), static_cast<float>(truth[0].theta_deg),
                   static_cast<std::uint16_t>(truth[0].depth)};
   std::vector<Run> runs;
-  const auto track = [&](const std::string& name, const SessionOptions& session) {
+  const auto track = [&](const std::string& name, const SessionOptions& session, const TableView& with) {
     host::TrackingOptions options;
     options.session = session;
     Run r{name, {}, 0, {}};
     MemoryFrames src(frames);
     double total = 0;
-    host::run_tracking(table, src, init, options, [&](const host::TrackRow& row) {
+    host::run_tracking(with, src, init, options, [&](const host::TrackRow& row) {
       r.poses.push_back({row.frame, row.step.pose.x, row.step.pose.y, row.step.pose.theta_deg, row.step.pose.depth, true});
       total += row.micros;
       r.micros.push_back(row.micros);
@@ -193,31 +193,18 @@ int run_microscope(const std::string& dir, bool quick) {
     r.mean_us = total / static_cast<double>(frames.size());
     runs.push_back(r);
   };
-  track("gabarit, thesis loop (cell centres)", kPlainSession);
+  track("gabarit, thesis loop (cell centres)", kPlainSession, table);
   SessionOptions refine_only = kPlainSession;
   refine_only.refine = true;
-  track("gabarit + sub-cell refinement", refine_only);
-  track("gabarit + motion filter + refinement + recovery", SessionOptions{});
+  track("gabarit + sub-cell refinement", refine_only, table);
+  track("gabarit + motion filter + refinement + recovery", SessionOptions{}, table);
   // The same with the Canny variant as detector (model and frames).
   host::ImageModelOptions canny_options;
   canny_options.canny = true;
   const std::vector<std::byte> canny_bytes = host::build_table(host::model_from_images(model_paths, canny_options), bo);
   TableView canny_table;
   if (TableView::open(canny_bytes, canny_table) != Status::kOk) throw host::Error("microscope: Canny table invalid");
-  {
-    host::TrackingOptions options;
-    options.session = SessionOptions{};
-    Run r{"the same, Canny variant detector", {}, 0, {}};
-    MemoryFrames src(frames);
-    double total = 0;
-    host::run_tracking(canny_table, src, init, options, [&](const host::TrackRow& row) {
-      r.poses.push_back({row.frame, row.step.pose.x, row.step.pose.y, row.step.pose.theta_deg, row.step.pose.depth, true});
-      total += row.micros;
-      r.micros.push_back(row.micros);
-    });
-    r.mean_us = total / static_cast<double>(frames.size());
-    runs.push_back(r);
-  }
+  track("the same, Canny variant detector", SessionOptions{}, canny_table);
   {
     NccBank ncc(model_images, 4, 0.5, 3);
     Run r{"OpenCV NCC bank (TM_CCOEFF_NORMED, same 4-DOF window)", {}, 0, {}};
