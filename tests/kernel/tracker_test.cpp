@@ -18,16 +18,7 @@ using testing::point_model;
 using Scratch = testing::TrackerTestScratch;
 
 GrayImage draw(const std::vector<host::Point>& pts, float x, float y, float theta_deg, std::uint32_t size = 96) {
-  GrayImage img(size, size);
-  const SinCos sc = sin_cos_deg(theta_deg);
-  for (const host::Point& p : pts) {
-    const auto px = round_to_int(x + sc.cos * static_cast<float>(p.x) - sc.sin * static_cast<float>(p.y));
-    const auto py = round_to_int(y + sc.sin * static_cast<float>(p.x) + sc.cos * static_cast<float>(p.y));
-    if (px >= 0 && py >= 0 && px < static_cast<std::int32_t>(size) && py < static_cast<std::int32_t>(size)) {
-      img.at(static_cast<std::uint32_t>(px), static_cast<std::uint32_t>(py)) = 255;
-    }
-  }
-  return img;
+  return testing::draw_points(pts, x, y, theta_deg, size);
 }
 
 TEST(Tracker, FindsATranslationExactly) {

@@ -24,15 +24,7 @@ using testing::point_model;
 
 using Scratch = testing::TrackerTestScratch;
 
-GrayImage draw(const std::vector<host::Point>& pts, float x, float y, std::uint32_t size = 160) {
-  GrayImage img(size, size);
-  for (const host::Point& p : pts) {
-    const auto px = round_to_int(x + static_cast<float>(p.x)), py = round_to_int(y + static_cast<float>(p.y));
-    if (px >= 0 && py >= 0 && px < static_cast<std::int32_t>(size) && py < static_cast<std::int32_t>(size))
-      img.at(static_cast<std::uint32_t>(px), static_cast<std::uint32_t>(py)) = 255;
-  }
-  return img;
-}
+GrayImage draw(const std::vector<host::Point>& pts, float x, float y) { return testing::draw_points(pts, x, y, 0.0f, 160); }
 
 TEST(MotionFilter, ConfidenceIsGradedRelativeToTheReferenceScore) {
   MotionFilterParams p;  // high >= 0.7 r, none < 0.5 r

@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "gabarit/byte_order.hpp"
+#include "gabarit/deterministic_math.hpp"
 #include "gabarit/host/state_space.hpp"
 
 namespace gabarit::testing {
@@ -53,6 +54,19 @@ TableView open_table(std::span<const std::byte> bytes) {
 
 void reseal(std::vector<std::byte>& table) {
   store_le<std::uint32_t>(table.data() + table_format::offset::kCrc32, table_checksum(table));
+}
+
+host::GrayImage draw_points(const std::vector<host::Point>& pts, float x, float y, float theta_deg, std::uint32_t size) {
+  host::GrayImage img(size, size);
+  const SinCos sc = sin_cos_deg(theta_deg);
+  for (const host::Point& p : pts) {
+    const auto px = round_to_int(x + sc.cos * static_cast<float>(p.x) - sc.sin * static_cast<float>(p.y));
+    const auto py = round_to_int(y + sc.sin * static_cast<float>(p.x) + sc.cos * static_cast<float>(p.y));
+    if (px >= 0 && py >= 0 && px < static_cast<std::int32_t>(size) && py < static_cast<std::int32_t>(size)) {
+      img.at(static_cast<std::uint32_t>(px), static_cast<std::uint32_t>(py)) = 255;
+    }
+  }
+  return img;
 }
 
 }  // namespace gabarit::testing

@@ -11,7 +11,7 @@
 //   high          s1 >= high_ratio * r and s1 - s2 >= high_margin * r
 //   none          s1 < low_ratio * r, or no candidate within the gate
 //   intermediate  otherwise
-// Per frame, with m the measured motion (new pose - previous pose):
+// Per frame, with m the measured motion (this frame's pose - the previous one):
 //   high          v <- (1 - K1) v + K1 m     uncertainty <- 0
 //   intermediate  v <- (1 - K2) v + K2 m     uncertainty += U1
 //   none          v <- K3 v (pose = the prediction)   uncertainty += U2
