@@ -10,7 +10,6 @@
 #include <cstring>
 #include <vector>
 
-#include "gabarit/deterministic_math.hpp"
 #include "gabarit/host/image_io.hpp"
 #include "gabarit/refinement.hpp"
 #include "test_tables.hpp"
