@@ -71,12 +71,12 @@ gabarit-board $board_args --gpio-chip "$chip" --lock-line 0 --strobe-line 1 --st
   > /tmp/poses.csv 2> /tmp/board.log &
 board=$!
 # Captured buffers come back flagged V4L2_BUF_FLAG_ERROR: skipped, counted.
-# (vivid drops an injection when no capture buffer is queued at its next
-# tick, so three are made and at least one must arrive.)
-sleep 2
-for i in 1 2 3; do
+# (vivid loses about one injection in three, apparently when its next tick
+# finds no queued capture buffer; ten are made and at least one must arrive.)
+sleep 1
+for i in 1 2 3 4 5 6 7 8 9 10; do
   gabarit-vivid-feed error --capture /dev/video0 || fail "vivid error injection"
-  sleep 0.4
+  sleep 0.15
 done
 wait $feed || fail "feeding frames"
 sleep 0.3
@@ -92,7 +92,7 @@ tracked=$(($(wc -l < /tmp/poses.csv) - 1))
 read rising lock_high samples < /tmp/sampled
 echo "virtual-board: $tracked frames tracked, $rising strobe pulses seen in $samples samples, lock high seen: $lock_high"
 [ "$tracked" -ge "$FRAMES" ] || fail "only $tracked frames tracked"
-grep -Eq " [1-3] flagged bad" /tmp/board.log || fail "no error-flagged buffer was skipped and counted"
+grep -Eq " ([1-9]|10) flagged bad" /tmp/board.log || fail "no error-flagged buffer was skipped and counted"
 # A polled shell sees nearly every 8 ms pulse; demand 90% of the frames.
 [ $((rising * 10)) -ge $((tracked * 9)) ] && [ "$rising" -le "$tracked" ] || fail "strobe: $rising pulses for $tracked frames"
 [ "$lock_high" = 1 ] || fail "lock never went high while tracking"
