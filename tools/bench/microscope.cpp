@@ -1,6 +1,10 @@
 #include "microscope.hpp"
 
 #include <opencv2/imgproc.hpp>
+#if GABARIT_HAVE_OPENCV_TRACKING
+#include <opencv2/tracking.hpp>
+#include <opencv2/tracking/tracking_legacy.hpp>
+#endif
 
 #include <algorithm>
 #include <chrono>
@@ -59,6 +63,7 @@ struct Run {
   std::vector<host::PoseSample> poses;
   double mean_us = 0;
   std::vector<double> micros;
+  bool position_only = false;  // OpenCV's box trackers: angle and depth are not estimated
   double median_us() const {
     std::vector<double> v = micros;
     std::sort(v.begin(), v.end());
@@ -221,6 +226,52 @@ int run_microscope(const std::string& dir, bool quick) {
     runs.push_back(r);
   }
   const double ncc_us = runs.back().mean_us, ncc_median = runs.back().median_us();
+#if GABARIT_HAVE_OPENCV_TRACKING
+  {
+    // OpenCV's correlation-filter trackers: position only (no angle or depth),
+    // initialised with the object's box in frame 0, on BGR copies of the frames
+    // (made before timing; KCF and CSRT use colour names otherwise).
+    std::vector<cv::Mat> bgr;
+    for (const auto& f : frames) {
+      cv::Mat m;
+      cv::cvtColor(cv::Mat(static_cast<int>(f.height), static_cast<int>(f.width), CV_8U, const_cast<std::uint8_t*>(f.pixels.data())), m,
+                   cv::COLOR_GRAY2BGR);
+      bgr.push_back(m);
+    }
+    const int side = model_images[0].width > 16 ? static_cast<int>(model_images[0].width) - 16 : static_cast<int>(model_images[0].width);
+    const cv::Rect box(static_cast<int>(std::lround(init.x)) - side / 2, static_cast<int>(std::lround(init.y)) - side / 2, side, side);
+    const auto run_cv = [&](const std::string& name, auto&& init_tracker, auto&& update) {
+      Run r{name, {}, 0, {}};
+      double total = 0;
+      cv::Rect2d at = box;  // a failed update keeps the last box
+      for (std::uint32_t f = 0; f < frames.size(); ++f) {
+        const auto t = Clock::now();
+        if (f == 0) init_tracker(bgr[f], box);
+        else update(bgr[f], at);
+        r.micros.push_back(micros_since(t));
+        total += r.micros.back();
+        r.poses.push_back({f, at.x + at.width / 2, at.y + at.height / 2, 0, 0, true});
+      }
+      r.mean_us = total / static_cast<double>(frames.size());
+      r.position_only = true;
+      runs.push_back(r);
+    };
+    {
+      cv::Ptr<cv::legacy::TrackerMOSSE> mosse = cv::legacy::TrackerMOSSE::create();
+      run_cv("OpenCV MOSSE (position only)", [&](const cv::Mat& m, const cv::Rect& b) { mosse->init(m, cv::Rect2d(b)); },
+             [&](const cv::Mat& m, cv::Rect2d& b) { mosse->update(m, b); });
+    }
+    for (const bool csrt : {false, true}) {
+      cv::Ptr<cv::Tracker> tracker = csrt ? cv::Ptr<cv::Tracker>(cv::TrackerCSRT::create()) : cv::Ptr<cv::Tracker>(cv::TrackerKCF::create());
+      run_cv(csrt ? "OpenCV CSRT (position only)" : "OpenCV KCF (position only)",
+             [&](const cv::Mat& m, const cv::Rect& b) { tracker->init(m, b); },
+             [&](const cv::Mat& m, cv::Rect2d& b) {
+               cv::Rect r;
+               if (tracker->update(m, r)) b = r;
+             });
+    }
+  }
+#endif
   md << "## Accuracy and time per frame\n\n";
   md << "Visible frames only. Targets: position within 1 px in >= 98%, angle within 1 deg in >= 98%, depth exact in >= 95%, "
         "reacquired within 10 frames after the occlusion, time <= 1/30 of the NCC bank.\n\n";
@@ -240,8 +291,10 @@ int run_microscope(const std::string& dir, bool quick) {
     std::string reacq;
     for (int v : a.reacquired_after) reacq += (reacq.empty() ? "" : ", ") + (v < 0 ? std::string("never") : std::to_string(v) + " frames");
     md << "| " << r.name << " | " << share(1) << " | " << share(2) << " | " << share(6) << " | " << share(12) << " | " << share(20)
-       << " | " << share(40) << " | " << fmt(100.0 * static_cast<double>(a.within_1deg) / static_cast<double>(a.frames)) << "% | "
-       << fmt(100.0 * static_cast<double>(a.depth_exact) / static_cast<double>(a.frames)) << "% | " << reacq << " | "
+       << " | " << share(40) << " | "
+       << (r.position_only ? std::string("n/a") : fmt(100.0 * static_cast<double>(a.within_1deg) / static_cast<double>(a.frames)) + "%")
+       << " | " << (r.position_only ? std::string("n/a") : fmt(100.0 * static_cast<double>(a.depth_exact) / static_cast<double>(a.frames)) + "%")
+       << " | " << reacq << " | "
        << fmt(r.mean_us) << " | " << fmt(r.median_us()) << " | " << fmt(ncc_us / r.mean_us) << "x | "
        << fmt(ncc_median / r.median_us()) << "x |\n";
     std::ofstream csv(fs::path(dir) / ("poses-" + std::to_string(&r - runs.data()) + ".csv"));

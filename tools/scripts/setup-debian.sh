@@ -8,6 +8,7 @@ packages=(
   g++-aarch64-linux-gnu g++-arm-linux-gnueabihf qemu-user qemu-system-arm
   gcc-arm-none-eabi libnewlib-arm-none-eabi libstdc++-arm-none-eabi-newlib
   libopencv-imgproc-dev   # gabarit bench's peer (matchTemplate); never linked into the tracker
+  libopencv-contrib-dev   # gabarit bench --microscope's MOSSE, KCF and CSRT peers
   python3-skimage netpbm  # the real photograph behind the 'watch' shape, converted at run time
   verilator zlib1g-dev    # hardware voter co-simulation (FST waveforms need zlib)
   libgpiod-dev            # the board application's GPIO lines (libgpiod 1.6, the v1 API)
