@@ -59,8 +59,8 @@ Pose pose_of_cell(const TableView& table, std::uint32_t cell_index, const Pose& 
   return pose;
 }
 
-Status track_step(const TableView& table, const Detector& detector, const ImageView& image, const Pose& previous,
-                  TrackerScratch scratch, StepResult& result) noexcept {
+Status prepare_frame(const TableView& table, const Detector& detector, const ImageView& image, const Pose& previous,
+                     TrackerScratch scratch, PreparedFrame& out) noexcept {
   if (!image.valid() || !finite_and_bounded(previous.x) || !finite_and_bounded(previous.y) ||
       !finite_and_bounded(previous.theta_deg)) {
     return Status::kInvalidArgument;
@@ -83,27 +83,22 @@ Status track_step(const TableView& table, const Detector& detector, const ImageV
     window = {cx - half, cy - half, static_cast<std::uint16_t>(side), static_cast<std::uint16_t>(side)};
   }
 
-  GABARIT_TRY(clear_counters(table, scratch.counters));
-  const bool dense = !scratch.dense_masks.empty();
-  const SinCos sc = sin_cos_deg(previous.theta_deg);
-  VoteTally tally;
   FeatureCount found;
   GABARIT_TRY(extract_features(image, window, detector.kind, detector.threshold, scratch.features, found));
   std::uint32_t n = found.written;
-  if (rotated) n = rotate_into_roi(table, scratch.features, n, window, cx, cy, sc, scratch.roi_mask);
-  const std::span<const RoiPoint> features = scratch.features.first(n);
-  if (dense) {
-    GABARIT_TRY(accumulate_votes_dense(table, scratch.dense_masks, features, scratch.counters, scratch.dense_scratch, tally));
-  } else {
-    GABARIT_TRY(accumulate_votes(table, features, scratch.counters, tally));
-  }
+  if (rotated) n = rotate_into_roi(table, scratch.features, n, window, cx, cy, sin_cos_deg(previous.theta_deg), scratch.roi_mask);
+  out = {cx, cy, n, found.dropped};
+  return Status::kOk;
+}
 
+Status finish_frame(const TableView& table, const Pose& previous, const PreparedFrame& frame,
+                    std::span<const VoteCounter> counters, const VoteTally& tally, StepResult& result) noexcept {
   CellScore top[2];
   const std::size_t k = table.cell_count() >= 2 ? 2 : 1;
-  GABARIT_TRY(select_top_cells(table, scratch.counters, std::span<CellScore>(top, k)));
+  GABARIT_TRY(select_top_cells(table, counters, std::span<CellScore>(top, k)));
   if (k == 1) top[1] = {kNoCell, 0, 0};
 
-  result.pose = pose_of_cell(table, top[0].cell, previous, cx, cy);
+  result.pose = pose_of_cell(table, top[0].cell, previous, frame.roi_centre_x, frame.roi_centre_y);
   result.best = top[0];
   result.runner_up = top[1];
   result.score = normalised_score(top[0]);
@@ -114,12 +109,27 @@ Status track_step(const TableView& table, const Detector& detector, const ImageV
   } else {
     result.state = TrackState::kTracking;
   }
-  result.roi_centre_x = cx;
-  result.roi_centre_y = cy;
+  result.roi_centre_x = frame.roi_centre_x;
+  result.roi_centre_y = frame.roi_centre_y;
   result.features = tally.features;
-  result.features_dropped = found.dropped;
+  result.features_dropped = frame.features_dropped;
   result.votes = tally.votes;
   return Status::kOk;
+}
+
+Status track_step(const TableView& table, const Detector& detector, const ImageView& image, const Pose& previous,
+                  TrackerScratch scratch, StepResult& result) noexcept {
+  PreparedFrame frame;
+  GABARIT_TRY(prepare_frame(table, detector, image, previous, scratch, frame));
+  GABARIT_TRY(clear_counters(table, scratch.counters));
+  const std::span<const RoiPoint> features = scratch.features.first(frame.features);
+  VoteTally tally;
+  if (!scratch.dense_masks.empty()) {
+    GABARIT_TRY(accumulate_votes_dense(table, scratch.dense_masks, features, scratch.counters, scratch.dense_scratch, tally));
+  } else {
+    GABARIT_TRY(accumulate_votes(table, features, scratch.counters, tally));
+  }
+  return finish_frame(table, previous, frame, scratch.counters, tally, result);
 }
 
 }  // namespace gabarit

@@ -48,6 +48,13 @@ for key in cells references bytes bytes_per_cell refs_per_pixel_histogram stenci
 done
 python3 -c 'import json,sys; json.load(open(sys.argv[1]))' "$work/inspect.json" 2>/dev/null || [ $? = 127 ] || fail "inspect output is not JSON"
 
+# Voting on several threads gives the same poses as one thread.
+init0=$(sed -n 2p "$d/gt.csv" | cut -d, -f2,3)
+$g track --table "$work/a.gbt" --frames "$d/frames.y4m" --init "$init0" --voter csr -o "$work/one.csv" 2>/dev/null || fail "track (1 thread)"
+$g track --table "$work/a.gbt" --frames "$d/frames.y4m" --init "$init0" --threads 3 -o "$work/three.csv" 2>/dev/null || fail "track --threads 3"
+cmp -s "$work/one.csv" "$work/three.csv" || fail "--threads 3 changed the poses"
+expect 2 "plain loop" $g track --table "$work/a.gbt" --frames "$d/frames.y4m" --init "$init0" --threads 2 --motion-filter
+
 # A focus stack given as --model a b (two depths) builds one cell set per depth.
 $g tables build --model "$d/model.pgm" "$d/model.pgm" --binary --x -1:1:3 --y 0:0:1 -o "$work/stack.gbt" 2>/dev/null
 grep -q '"depths": 2' <($g tables inspect "$work/stack.gbt") || fail "two --model images did not make two depths"

@@ -28,6 +28,7 @@ int track(const std::vector<std::string>& argv) {
              {"--refine", "", "sub-cell x, y, theta from a parabola through the neighbouring cells' scores"},
              {"--recover", "", "once lost, search around the last confident pose until a confident hit"},
              {"--coarse", "T", "table for the recovery search (larger cells, wider window; implies --recover)"},
+             {"--threads", "N", "vote each frame on N threads (plain loop only; same output), 1..64 (default 1)"},
              {"-o", "POSES.csv", "pose output (default stdout)"},
              {"--stats", "STATS.json", "per-frame timing and vote statistics"}});
   if (!args.parse(argv)) return 0;
@@ -44,6 +45,10 @@ int track(const std::vector<std::string>& argv) {
   options.session.motion_filter = args.has("--motion-filter");
   options.session.refine = args.has("--refine");
   options.session.recover = args.has("--recover") || args.has("--coarse");
+  options.threads = static_cast<unsigned>(args.integer("--threads", 1, 1, 64));
+  if (options.threads > 1 && (options.session.motion_filter || options.session.refine || options.session.recover))
+    throw UsageError("--threads applies to the plain loop, without --motion-filter, --refine, --recover or --coarse");
+  if (options.threads > 1 && args.has("--voter")) throw UsageError("--threads votes with its own (multi-threaded CSR) voter; drop --voter");
   std::optional<host::MappedFile> coarse_file;
   TableView coarse;
   if (args.has("--coarse")) {

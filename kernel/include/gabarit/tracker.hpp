@@ -106,6 +106,25 @@ struct Detector {
 };
 inline Detector detector_of(const TableView& t) noexcept { return {t.detector_kind(), t.detector_threshold()}; }
 
+// track_step in two halves, for a caller that votes its own way in between
+// (gabarit track --threads votes on several cores):
+//   prepare_frame  the features of the frame, in the table frame, written to
+//                  scratch.features[0, features);
+//   (vote)         clear the counters, vote those features into them;
+//   finish_frame   the best cells and the pose update.
+// track_step is exactly prepare_frame, clear_counters, accumulate_votes (or
+// the dense voter) and finish_frame.
+struct PreparedFrame {
+  std::int32_t roi_centre_x = 0;
+  std::int32_t roi_centre_y = 0;
+  std::uint32_t features = 0;          // valid entries at the start of scratch.features
+  std::uint32_t features_dropped = 0;
+};
+Status prepare_frame(const TableView& table, const Detector& detector, const ImageView& image, const Pose& previous,
+                     TrackerScratch scratch, PreparedFrame& out) noexcept;
+Status finish_frame(const TableView& table, const Pose& previous, const PreparedFrame& frame,
+                    std::span<const VoteCounter> counters, const VoteTally& tally, StepResult& result) noexcept;
+
 // The pose update for cell `cell` measured from `previous` with the ROI centred
 // on (cx, cy): (x, y) = c + R(theta) (t + offset), theta' = theta + a + offset,
 // depth' = n (see the geometry above). track_step uses it with no offset; the

@@ -6,6 +6,7 @@
 
 #include "gabarit/dense_voter.hpp"
 #include "gabarit/host/error.hpp"
+#include "gabarit/host/parallel_voter.hpp"
 
 namespace gabarit::host {
 
@@ -46,8 +47,50 @@ TrackerBuffers::TrackerBuffers(const TableView& table, VoterChoice voter)
 
 TrackerScratch TrackerBuffers::scratch() { return {features_, counters_, mask_, masks_, dense_scratch_}; }
 
+namespace {
+
+// The plain loop with each frame's vote on several threads: prepare_frame,
+// the parallel voter, finish_frame (tracker.hpp).
+void run_plain_parallel(const TableView& table, FrameSource& frames, const Pose& init, const TrackingOptions& options,
+                        const std::function<void(const TrackRow&)>& on_row) {
+  TrackerBuffers buffers(table, VoterChoice::kCsr);
+  const TrackerScratch scratch = buffers.scratch();
+  ParallelVoter voter(options.threads, ParallelVoter::Split::kFeatures);
+  const Detector detector = options.detector ? *options.detector : detector_of(table);
+  GrayImage frame;
+  TrackRow row;
+  Pose pose = init;
+  for (std::uint32_t index = 0; frames.next(frame); ++index) {
+    const auto start = std::chrono::steady_clock::now();
+    PreparedFrame prepared;
+    VoteTally tally;
+    Status status = prepare_frame(table, detector, frame.view(), pose, scratch, prepared);
+    if (status == Status::kOk) status = clear_counters(table, scratch.counters);
+    if (status == Status::kOk) status = voter.accumulate(table, scratch.features.first(prepared.features), scratch.counters, tally);
+    if (status == Status::kOk) status = finish_frame(table, pose, prepared, scratch.counters, tally, row.step);
+    const auto stop = std::chrono::steady_clock::now();
+    if (status != Status::kOk) throw Error("frame " + std::to_string(index) + ": tracking failed: " + status_name(status));
+    if (row.step.state == TrackState::kLost) row.step.pose = pose;  // no evidence to move it (as the plain session)
+    pose = row.step.pose;
+    row.frame = index;
+    row.micros = std::chrono::duration<double, std::micro>(stop - start).count();
+    row.confidence = Confidence::kNone;  // not graded: the plain loop has no reference score
+    row.reacquired = false;
+    on_row(row);
+  }
+}
+
+}  // namespace
+
 void run_tracking(const TableView& table, FrameSource& frames, const Pose& init, const TrackingOptions& options,
                   const std::function<void(const TrackRow&)>& on_row) {
+  if (options.threads > 1) {
+    const SessionOptions& s = options.session;
+    if (s.motion_filter || s.refine || s.recover || options.coarse != nullptr)
+      throw Error("voting on several threads applies to the plain loop (no motion filter, refinement or recovery)");
+    run_plain_parallel(table, frames, init, options, on_row);
+    return;
+  }
   TrackerBuffers buffers(table, options.voter);
   std::optional<TrackerBuffers> coarse_buffers;
   SessionScratch scratch{buffers.scratch(), {}};

@@ -54,6 +54,10 @@ struct TrackingOptions {
   VoterChoice voter = VoterChoice::kAuto;
   SessionOptions session = kPlainSession;  // motion filter, refinement, recovery
   const TableView* coarse = nullptr;       // the recovery search's table (else the fine one)
+  // Threads voting each frame (parallel_voter.hpp, features split). Above 1,
+  // only for the plain loop (kPlainSession, no coarse table); the rows are
+  // the same bytes as with one thread.
+  unsigned threads = 1;
 };
 
 // Calls on_row for every frame. row.step is the frame's vote with the
