@@ -24,8 +24,9 @@ module gbt_fifo #(
   logic [WidthBits-1:0] mem_q [Depth];
   logic [PtrWidth-1:0]  rd_q, wr_q;
   logic [PtrWidth:0]    used_q;
+  logic                 empty_q;  // used_q == 0, registered: the consumer's pop depends on it
 
-  assign empty_o = (used_q == '0);
+  assign empty_o = empty_q;
   assign full_o  = (used_q == (PtrWidth + 1)'(Depth));
   assign free_o  = (PtrWidth + 1)'(Depth) - used_q;
   assign rdata_o = mem_q[rd_q];
@@ -38,10 +39,12 @@ module gbt_fifo #(
       rd_q <= '0;
       wr_q <= '0;
       used_q <= '0;
+      empty_q <= 1'b1;
     end else begin
       if (do_push) wr_q <= wr_q + 1'b1;
       if (do_pop) rd_q <= rd_q + 1'b1;
       used_q <= used_q + (PtrWidth + 1)'(do_push) - (PtrWidth + 1)'(do_pop);
+      empty_q <= !do_push && (do_pop ? used_q == (PtrWidth + 1)'(1) : empty_q);
     end
   end
 
@@ -72,6 +75,7 @@ module gbt_fifo #(
     if (rst_ni) begin
       assume (wdata_i == f_pushed_q);
       assert (used_q <= (PtrWidth + 1)'(Depth));
+      assert (empty_q == (used_q == '0));
       assert (f_pushed_q - f_popped_q == WidthBits'(used_q));  // at full width, not modulo the depth
       assert (wr_q == PtrWidth'(rd_q + used_q[PtrWidth-1:0]));
       if (!empty_o) assert (rdata_o == f_popped_q);
@@ -90,7 +94,10 @@ module gbt_fifo #(
 `ifndef SYNTHESIS
   /* verilator lint_off SYNCASYNCNET */  // rst_ni only quiets the check during reset
   always_ff @(posedge clk_i) begin
-    if (rst_ni) Occupancy: assert (used_q <= (PtrWidth + 1)'(Depth));
+    if (rst_ni) begin
+      Occupancy: assert (used_q <= (PtrWidth + 1)'(Depth));
+      EmptyFlag: assert (empty_q == (used_q == '0));
+    end
   end
   /* verilator lint_on SYNCASYNCNET */
 `endif

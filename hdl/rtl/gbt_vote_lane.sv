@@ -13,12 +13,11 @@
 //       word; a write lands before the read one cycle later, so one-deep
 //       forwarding is enough). new = old + 1, saturating at 2^16 - 1 like the
 //       kernel; written back in this cycle.
-//   S4, S5 the bank's top-2 (best, runner-up) updated with the new count, in
-//       two pipelined steps (see below). Counts only grow within a frame, so
-//       the incremental top-2 is exact: a cell that overtakes the best pushes
-//       it to runner-up; one that overtakes the runner-up replaces it.
+//   S4-S6 the bank's top-2 (best, runner-up) updated with the new count, in
+//       three pipelined steps: products, comparisons, update (see below).
+//       Counts only grow within a frame, so the incremental top-2 is exact.
 //
-// Latency from FIFO push to top-2 update: 5 clocks for a range's first vote.
+// Latency from FIFO push to top-2 update: 6 clocks for a range's first vote.
 // Clearing (clear_i) sweeps the bank's counters, one per clock
 // (CellsPerLane clocks), and resets the top-2 to the bank's two lowest cells
 // with zero votes — exactly where the kernel's ranking starts.
@@ -90,7 +89,8 @@ module gbt_vote_lane #(
   logic                       gen_active_q;
   logic [OffsetWidth-1:0]     gen_addr_q;
   logic [RangeCountWidth-1:0] gen_left_q;
-  wire last_ref = gen_active_q && (gen_left_q == RangeCountWidth'(1));
+  logic                       gen_last_q;  // gen_left_q == 1, kept as a flag so pop is shallow
+  wire last_ref = gen_active_q && gen_last_q;
   assign pop = !fifo_empty && (!gen_active_q || last_ref);
 
   always_ff @(posedge clk_i or negedge rst_ni) begin
@@ -98,14 +98,17 @@ module gbt_vote_lane #(
       gen_active_q <= 1'b0;
       gen_addr_q <= '0;
       gen_left_q <= '0;
+      gen_last_q <= 1'b0;
     end else if (pop) begin
       gen_active_q <= 1'b1;
       gen_addr_q <= head_begin;
       gen_left_q <= head_count;
+      gen_last_q <= head_count == RangeCountWidth'(1);
     end else if (gen_active_q) begin
       gen_active_q <= !last_ref;
       gen_addr_q <= gen_addr_q + 1'b1;
       gen_left_q <= gen_left_q - 1'b1;
+      gen_last_q <= gen_left_q == RangeCountWidth'(2);
     end
   end
 
@@ -147,13 +150,23 @@ module gbt_vote_lane #(
   );
   assign cnt_rdata_o = cnt_rdata;
 
-  assign s3_old = (s4_valid_q && s4_cell_q == s3_cell_q) ? s4_votes_q : cnt_rdata;
-  assign s3_new = (s3_old == '1) ? s3_old : s3_old + 1'b1;
+  // Forwarding is decided one clock early (the refs RAM's output against the
+  // cell in S3), and both candidates are incremented side by side, so S3 is a
+  // 16-bit carry chain and a mux. Saturating: an increment that carries out
+  // of 16 bits stays at 2^16 - 1.
+  logic s3_fwd_q;
+  wire [gbt_pkg::CounterWidthBits:0] inc_ram = {1'b0, cnt_rdata} + 1'b1;
+  wire [gbt_pkg::CounterWidthBits:0] inc_fwd = {1'b0, s4_votes_q} + 1'b1;
+  wire gbt_pkg::count_t sat_ram = inc_ram[gbt_pkg::CounterWidthBits-1:0] | {gbt_pkg::CounterWidthBits{inc_ram[gbt_pkg::CounterWidthBits]}};
+  wire gbt_pkg::count_t sat_fwd = inc_fwd[gbt_pkg::CounterWidthBits-1:0] | {gbt_pkg::CounterWidthBits{inc_fwd[gbt_pkg::CounterWidthBits]}};
+  assign s3_old = s3_fwd_q ? s4_votes_q : cnt_rdata;  // for the assertion below
+  assign s3_new = s3_fwd_q ? sat_fwd : sat_ram;
 
   always_ff @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       s2_valid_q <= 1'b0;
       s3_valid_q <= 1'b0;
+      s3_fwd_q <= 1'b0;
       s4_valid_q <= 1'b0;
       s3_cell_q <= '0;
       s4_cell_q <= '0;
@@ -162,6 +175,7 @@ module gbt_vote_lane #(
     end else begin
       s2_valid_q <= gen_active_q;
       s3_valid_q <= s2_valid_q;
+      s3_fwd_q <= s3_valid_q && s2_cell == s3_cell_q;
       s3_cell_q <= s2_cell;
       s4_valid_q <= s3_valid_q;
       s4_cell_q <= s3_cell_q;
@@ -183,69 +197,141 @@ module gbt_vote_lane #(
     end
   end
 
-  // ------------------------------------------------- S4, S5: top-2, pipelined
+  // --------------------------------------------- S4, S5, S6: top-2, pipelined
   // The top-2 lives in local cell indices: within a bank, c / Lanes orders
-  // cells exactly as c does, and the comparisons stay narrow.
-  //   S4 (stage A): the new count x is compared with the bank's best and
-  //     runner-up as they stand now, and with y, the count in S5 whose update
-  //     lands at the end of this clock (three cross-multiplications).
-  //   S5 (stage B): y's update has landed. It can only have put y into best
-  //     or runner-up, or moved the old best down to runner-up, so x's
-  //     comparison with the current best and runner-up is one of the three
-  //     computed in S4, picked by cell identity. Then the update rules.
-  // Exact whatever the sequence of cells, and no comparison longer than one
-  // clock. Latency from S3: 2 clocks.
+  // cells exactly as c does, and the comparisons stay narrow. Ranking x
+  // against a cell c needs two 16x16 products (votes_x * size_c and
+  // votes_c * size_x) and a 39-bit comparison; on an iCE40 the products and
+  // the comparison each take most of a clock, so they get one stage each, and
+  // every multiplier input comes straight from a register:
+  //   S4 (P, products): x is multiplied against four cells: the bank's best
+  //     (b) and runner-up (r) as they stand now, z, the count in S6 whose
+  //     update lands at the end of this clock, and y, the count in S5 whose
+  //     update lands one clock later. Products go to registers (the DSPs'
+  //     output registers).
+  //   S5 (C, compare): the four comparisons, each split into two 16-bit
+  //     chains and the tie-break so no carry chain is longer than 16 bits,
+  //     and x's cell against the four cells. z's update has landed and S5
+  //     knows what it did (its action), so it keeps the two comparisons that
+  //     describe the best and runner-up after z (see the action table below).
+  //   S6 (A, apply): likewise for y's action, which has just landed; then the
+  //     update rules for x, and x's action for the stages behind it.
+  // Actions and where the best and runner-up come from afterwards:
+  //   ActBestInPlace: best = the voted cell (it was the best), runner unchanged
+  //   ActNewBest:     best = the voted cell, runner = the old best
+  //   ActRunner:      best unchanged, runner = the voted cell
+  //   ActNone:        both unchanged
+  // Counts only grow within a frame, so the incremental top-2 is exact: a cell
+  // that overtakes the best pushes it to runner-up; one that overtakes the
+  // runner-up replaces it. Exact whatever the sequence of cells. Latency from
+  // S3: 3 clocks. Eight 16x16 multipliers per lane (all eight of a UP5K).
+  typedef enum logic [1:0] {ActNone, ActBestInPlace, ActNewBest, ActRunner} action_e;
+
   logic                      best_valid_q, runner_valid_q;
   logic [LocalCellWidth-1:0] best_cell_q, runner_cell_q;
   gbt_pkg::count_t           best_votes_q, runner_votes_q;
   gbt_pkg::size_t            best_size_q, runner_size_q;
   logic [31:0]               votes_q;
 
-  logic                      s5_valid_q, s5_beats_best_q, s5_beats_runner_q, s5_beats_prev_q;
-  logic [LocalCellWidth-1:0] s5_cell_q, s5_old_best_q;
-  gbt_pkg::count_t           s5_votes_q;
-  gbt_pkg::size_t            s5_size_q;
+  localparam int unsigned ProductWidth = gbt_pkg::CounterWidthBits + gbt_pkg::SizeWidthBits;
+  localparam int unsigned Half = ProductWidth / 2;
+  typedef logic [ProductWidth-1:0] product_t;
 
-  // Stage A (S4).
-  wire a_beats_best = !best_valid_q ||
-      gbt_pkg::ranks_before(32'(s4_cell_q), s4_votes_q, s4_size_q, 32'(best_cell_q), best_votes_q, best_size_q);
-  wire a_beats_runner = !runner_valid_q ||
-      gbt_pkg::ranks_before(32'(s4_cell_q), s4_votes_q, s4_size_q, 32'(runner_cell_q), runner_votes_q, runner_size_q);
-  wire a_beats_prev =
-      gbt_pkg::ranks_before(32'(s4_cell_q), s4_votes_q, s4_size_q, 32'(s5_cell_q), s5_votes_q, s5_size_q);
+  // S5 (C) registers: x with its products against b, r, z and y.
+  logic                      c_valid_q;
+  logic [LocalCellWidth-1:0] c_cell_q, c_b_cell_q, c_r_cell_q, c_z_cell_q;
+  gbt_pkg::count_t           c_votes_q;
+  gbt_pkg::size_t            c_size_q;
+  logic                      c_b_valid_q, c_r_valid_q;
+  product_t                  c_xb_q, c_bx_q, c_xr_q, c_rx_q, c_xz_q, c_zx_q, c_xy_q, c_yx_q;
 
-  // Stage B (S5): which comparison describes the current best and runner-up.
-  logic                      prev_valid_q;  // s5 one clock ago was a vote (y)
-  logic [LocalCellWidth-1:0] prev_cell_q;
-  wire best_is_prev   = prev_valid_q && best_valid_q && best_cell_q == prev_cell_q;
-  wire runner_is_prev = prev_valid_q && runner_valid_q && runner_cell_q == prev_cell_q;
-  wire runner_is_old_best = runner_valid_q && runner_cell_q == s5_old_best_q;
-  wire x_beats_best   = best_is_prev ? s5_beats_prev_q : s5_beats_best_q;
-  wire x_beats_runner = runner_is_prev ? s5_beats_prev_q : (runner_is_old_best ? s5_beats_best_q : s5_beats_runner_q);
+  // S6 (A) registers.
+  logic                      a_valid_q;
+  logic [LocalCellWidth-1:0] a_cell_q;
+  gbt_pkg::count_t           a_votes_q;
+  gbt_pkg::size_t            a_size_q;
+  logic                      a_beats_b_q, a_beats_r_q, a_beats_y_q, a_is_b_q, a_is_r_q, a_is_y_q;
+  action_e                   act_q;  // S6's action one clock ago
+
+  // x ranks before c given the two products and the tie-break (lower local
+  // index wins): {x_c, ~cell_x} > {c_x, ~cell_c} as two 16-bit halves.
+  function automatic logic ranks_before_split(input product_t xc, input product_t cx,
+                                              input logic [LocalCellWidth-1:0] cell_x,
+                                              input logic [LocalCellWidth-1:0] cell_c);
+    logic gt_hi, eq_hi, gt_lo, eq_lo;
+    gt_hi = xc[ProductWidth-1:Half] > cx[ProductWidth-1:Half];
+    eq_hi = xc[ProductWidth-1:Half] == cx[ProductWidth-1:Half];
+    gt_lo = xc[Half-1:0] > cx[Half-1:0];
+    eq_lo = xc[Half-1:0] == cx[Half-1:0];
+    ranks_before_split = gt_hi || (eq_hi && (gt_lo || (eq_lo && cell_x < cell_c)));
+  endfunction
+
+  // S4 (P): products. Data registers carry no reset so they map into the
+  // multipliers' output registers.
+  always_ff @(posedge clk_i) begin
+    c_xb_q <= ProductWidth'(s4_votes_q) * ProductWidth'(best_size_q);
+    c_bx_q <= ProductWidth'(best_votes_q) * ProductWidth'(s4_size_q);
+    c_xr_q <= ProductWidth'(s4_votes_q) * ProductWidth'(runner_size_q);
+    c_rx_q <= ProductWidth'(runner_votes_q) * ProductWidth'(s4_size_q);
+    c_xz_q <= ProductWidth'(s4_votes_q) * ProductWidth'(a_size_q);
+    c_zx_q <= ProductWidth'(a_votes_q) * ProductWidth'(s4_size_q);
+    c_xy_q <= ProductWidth'(s4_votes_q) * ProductWidth'(c_size_q);
+    c_yx_q <= ProductWidth'(c_votes_q) * ProductWidth'(s4_size_q);
+    c_cell_q <= s4_cell_q;
+    c_votes_q <= s4_votes_q;
+    c_size_q <= s4_size_q;
+    c_b_cell_q <= best_cell_q;
+    c_r_cell_q <= runner_cell_q;
+    c_z_cell_q <= a_cell_q;
+    c_b_valid_q <= best_valid_q;
+    c_r_valid_q <= runner_valid_q;
+  end
+
+  // S5 (C): comparisons and identities; act_q is z's action.
+  wire c_beats_b = !c_b_valid_q || ranks_before_split(c_xb_q, c_bx_q, c_cell_q, c_b_cell_q);
+  wire c_beats_r = !c_r_valid_q || ranks_before_split(c_xr_q, c_rx_q, c_cell_q, c_r_cell_q);
+  wire c_beats_z = ranks_before_split(c_xz_q, c_zx_q, c_cell_q, c_z_cell_q);
+  wire c_is_b = c_cell_q == c_b_cell_q;
+  wire c_is_r = c_cell_q == c_r_cell_q;
+  wire c_is_z = c_cell_q == c_z_cell_q;
+  wire z_is_best = act_q == ActBestInPlace || act_q == ActNewBest;
+  always_ff @(posedge clk_i) begin
+    a_beats_b_q <= z_is_best ? c_beats_z : c_beats_b;
+    a_is_b_q <= z_is_best ? c_is_z : c_is_b;
+    a_beats_r_q <= (act_q == ActNewBest) ? c_beats_b : ((act_q == ActRunner) ? c_beats_z : c_beats_r);
+    a_is_r_q <= (act_q == ActNewBest) ? c_is_b : ((act_q == ActRunner) ? c_is_z : c_is_r);
+    a_beats_y_q <= ranks_before_split(c_xy_q, c_yx_q, c_cell_q, a_cell_q);  // y is in S6 now
+    a_is_y_q <= c_cell_q == a_cell_q;
+    a_cell_q <= c_cell_q;
+    a_votes_q <= c_votes_q;
+    a_size_q <= c_size_q;
+  end
+
+  // S6 (A): act_q is y's action; a_*_b/a_*_r describe the best and runner-up
+  // after z.
+  wire y_is_best      = act_q == ActBestInPlace || act_q == ActNewBest;
+  wire x_is_best      = y_is_best ? a_is_y_q : a_is_b_q;
+  wire x_beats_best   = y_is_best ? a_beats_y_q : a_beats_b_q;
+  wire x_is_runner    = (act_q == ActNewBest) ? a_is_b_q : ((act_q == ActRunner) ? a_is_y_q : a_is_r_q);
+  wire x_beats_runner = (act_q == ActNewBest) ? a_beats_b_q : ((act_q == ActRunner) ? a_beats_y_q : a_beats_r_q);
+
+  action_e act;
+  always_comb begin
+    act = ActNone;
+    if (a_valid_q) begin
+      if (best_valid_q && x_is_best) act = ActBestInPlace;
+      else if (x_beats_best) act = ActNewBest;
+      else if ((runner_valid_q && x_is_runner) || x_beats_runner) act = ActRunner;
+    end
+  end
 
   always_ff @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
-      s5_valid_q <= 1'b0;
-      s5_beats_best_q <= 1'b0;
-      s5_beats_runner_q <= 1'b0;
-      s5_beats_prev_q <= 1'b0;
-      s5_cell_q <= '0;
-      s5_old_best_q <= '0;
-      s5_votes_q <= '0;
-      s5_size_q <= '0;
-      prev_valid_q <= 1'b0;
-      prev_cell_q <= '0;
+      c_valid_q <= 1'b0;
+      a_valid_q <= 1'b0;
     end else begin
-      s5_valid_q <= s4_valid_q;
-      s5_beats_best_q <= a_beats_best;
-      s5_beats_runner_q <= a_beats_runner;
-      s5_beats_prev_q <= s5_valid_q && a_beats_prev;
-      s5_cell_q <= s4_cell_q;
-      s5_old_best_q <= best_cell_q;
-      s5_votes_q <= s4_votes_q;
-      s5_size_q <= s4_size_q;
-      prev_valid_q <= s5_valid_q;
-      prev_cell_q <= s5_cell_q;
+      c_valid_q <= s4_valid_q;
+      a_valid_q <= c_valid_q;
     end
   end
 
@@ -260,6 +346,7 @@ module gbt_vote_lane #(
       best_size_q <= '0;
       runner_size_q <= '0;
       votes_q <= '0;
+      act_q <= ActNone;
     end else if (clear_i) begin
       // Zero votes everywhere: the kernel's order is then the cell index.
       best_valid_q <= LaneIndex < cell_count_i;
@@ -271,28 +358,34 @@ module gbt_vote_lane #(
       runner_votes_q <= '0;
       runner_size_q <= gbt_pkg::SizeWidthBits'(1);
       votes_q <= '0;
+      act_q <= ActNone;
     end else begin
       if (s3_valid_q) votes_q <= votes_q + 1;
-      if (s5_valid_q) begin
-        if (best_valid_q && s5_cell_q == best_cell_q) begin
-          best_votes_q <= s5_votes_q;
-          best_size_q <= s5_size_q;
-        end else if (x_beats_best) begin
+      unique case (act)
+        ActBestInPlace: begin
+          // The size too: after a clear the best holds a placeholder size.
+          best_votes_q <= a_votes_q;
+          best_size_q <= a_size_q;
+        end
+        ActNewBest: begin
           runner_valid_q <= best_valid_q;
           runner_cell_q <= best_cell_q;
           runner_votes_q <= best_votes_q;
           runner_size_q <= best_size_q;
           best_valid_q <= 1'b1;
-          best_cell_q <= s5_cell_q;
-          best_votes_q <= s5_votes_q;
-          best_size_q <= s5_size_q;
-        end else if ((runner_valid_q && s5_cell_q == runner_cell_q) || !runner_valid_q || x_beats_runner) begin
-          runner_valid_q <= 1'b1;
-          runner_cell_q <= s5_cell_q;
-          runner_votes_q <= s5_votes_q;
-          runner_size_q <= s5_size_q;
+          best_cell_q <= a_cell_q;
+          best_votes_q <= a_votes_q;
+          best_size_q <= a_size_q;
         end
-      end
+        ActRunner: begin
+          runner_valid_q <= 1'b1;
+          runner_cell_q <= a_cell_q;
+          runner_votes_q <= a_votes_q;
+          runner_size_q <= a_size_q;
+        end
+        default: ;
+      endcase
+      act_q <= act;
     end
   end
 
@@ -305,7 +398,7 @@ module gbt_vote_lane #(
   assign runner_votes_o = runner_votes_q;
   assign runner_size_o = runner_size_q;
   assign votes_o = votes_q;
-  assign idle_o = fifo_empty && !gen_active_q && !s2_valid_q && !s3_valid_q && !s4_valid_q && !s5_valid_q && !clearing_q;
+  assign idle_o = fifo_empty && !gen_active_q && !s2_valid_q && !s3_valid_q && !s4_valid_q && !c_valid_q && !a_valid_q && !clearing_q;
 
   // Checked in simulation (Verilator --assert) on every clock of the co-simulation:
   // counters never wrap and never decrease within a frame — each write is the
@@ -317,6 +410,7 @@ module gbt_vote_lane #(
   always_ff @(posedge clk_i) begin
     if (rst_ni && s3_valid_q && !clearing_q) begin
       CounterIncrements: assert (s3_new == s3_old + 1'b1 || (s3_old == '1 && s3_new == '1));
+      ForwardDecidedEarly: assert (s3_fwd_q == (s4_valid_q && s4_cell_q == s3_cell_q));
       CellInRange: assert (32'(s3_cell_q) < CellsPerLane);
     end
     if (rst_ni && range_push_i) NoPushWhenFull: assert (!fifo_full);

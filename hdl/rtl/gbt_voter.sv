@@ -16,10 +16,12 @@
 //     most; a feature is taken when valid && ready. Features outside the ROI
 //     are dropped and raise roi_error_o; features beyond MaxFeaturesPerFrame
 //     are dropped and raise overflow_o (the handshake never stalls on them).
-//   intake: clock t takes a feature, t+1 checks it and forms its pixel
-//     index, t+2 reads its offsets word, t+3 registers it, t+4 pushes each
-//     lane's non-empty range into that lane's FIFO. Ready needs five free
-//     FIFO slots in every lane (four in flight).
+//   intake: clock t takes a feature, t+1 compares it with the ROI and forms
+//     its pixel index, t+2 accepts or rejects it, t+3 reads its offsets
+//     word, t+4 registers it, t+5 registers each lane's range and whether
+//     it is non-empty, t+6 pushes it into that lane's FIFO. Ready needs
+//     seven free FIFO slots in every lane (six in flight), seen one clock
+//     earlier (ready is registered).
 //   frame_end_i (pulse, any time after frame_start_i, even while clearing —
 //     it is latched): the pipelines drain, the lanes' top-2 lists merge
 //     (at most 4*Lanes clocks; none with one lane), then result_valid_o stays high with
@@ -101,24 +103,37 @@ module gbt_voter #(
   logic end_pending_q;  // frame_end_i seen during StClear or StRun
 
   // ----------------------------------------------------------------- intake
-  logic [Lanes-1:0] lane_idle, lane_room;
+  logic [Lanes-1:0] lane_idle, lane_room, lane_pushing;
   logic [$clog2(FifoDepth):0] lane_free [Lanes];
   for (genvar k = 0; k < Lanes; k++) begin : g_room
-    assign lane_room[k] = lane_free[k] >= 5;
+    assign lane_room[k] = lane_free[k] >= 8;
+  end
+  // Room is registered so that ready is one LUT from flip-flops (the FIFO's
+  // free count is a subtraction and a comparison; the source's valid and our
+  // ready meet in the source's enable). A lane's free count drops by at most
+  // one per clock, so eight free slots one clock ago still mean seven now.
+  logic room_all_q;
+  always_ff @(posedge clk_i or negedge rst_ni) begin
+    if (!rst_ni) room_all_q <= 1'b0;
+    else room_all_q <= &lane_room;
   end
 
-  // Intake stages keep the input pins, the ROI check with the pixel-index
-  // multiply-add, and the RAM address apart, one clock each:
+  // Intake stages keep the input pins, the ROI comparisons with the
+  // pixel-index multiply-add, the accept decision and the RAM address apart,
+  // one clock each (each was the critical path of the iCE40 build in turn):
   //   I0 (clock t):   a feature is taken and registered
-  //   I1 (clock t+1): ROI and capacity checks, pixel index registered
-  //   I2 (clock t+2): offsets RAM read
-  //   I3 (clock t+3): offsets word registered (block RAM clock-to-out is slow)
-  //   I4 (clock t+4): each lane's non-empty range pushed into its FIFO
-  // Four features can be in flight, so ready needs five free slots per lane.
-  assign feat_ready_o = (state_q == StRun) && (&lane_room);
+  //   I1 (clock t+1): ROI comparisons and pixel index registered
+  //   I2 (clock t+2): capacity check, accept or reject
+  //   I3 (clock t+3): offsets RAM read
+  //   I4 (clock t+4): offsets word registered (block RAM clock-to-out is slow)
+  //   I5 (clock t+5): each lane's range and push decision (non-empty) registered
+  //   I6 (clock t+6): the range pushed into its lane's FIFO
+  // Six features can be in flight, so ready needs seven free slots per lane.
+  assign feat_ready_o = (state_q == StRun) && room_all_q;
   wire take = feat_valid_i && feat_ready_o;
 
-  logic        in_valid_q;
+  logic        in_valid_q, chk_valid_q, chk_in_roi_q;
+  logic [PixelWidth-1:0] chk_pixel_q;
   logic [15:0] in_col_q, in_row_q;
   logic [31:0] features_q;
   logic        overflow_q, roi_error_q, pixel_valid_q, pushing_q;
@@ -129,7 +144,7 @@ module gbt_voter #(
   logic [RoomWidth-1:0] room_left_q;
   logic                 room_q;
   wire in_roi = (in_col_q < roi_width_i) && (in_row_q < roi_height_i);
-  wire accept = in_valid_q && in_roi && room_q;
+  wire accept = chk_valid_q && chk_in_roi_q && room_q;
   // PixelWidth-bit arithmetic is exact whenever in_roi: row * width + col <
   // width * height <= PixelCapacity <= 2^PixelWidth.
   wire [PixelWidth-1:0] pixel = PixelWidth'(in_row_q) * PixelWidth'(roi_width_i) + PixelWidth'(in_col_q);
@@ -146,6 +161,9 @@ module gbt_voter #(
   always_ff @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       in_valid_q <= 1'b0;
+      chk_valid_q <= 1'b0;
+      chk_in_roi_q <= 1'b0;
+      chk_pixel_q <= '0;
       in_col_q <= '0;
       in_row_q <= '0;
       features_q <= '0;
@@ -160,6 +178,7 @@ module gbt_voter #(
       room_q <= MaxFeaturesPerFrame > 0;
     end else if (frame_start_i && (state_q == StIdle || state_q == StDone)) begin
       in_valid_q <= 1'b0;
+      chk_valid_q <= 1'b0;
       features_q <= '0;
       overflow_q <= 1'b0;
       roi_error_q <= 1'b0;
@@ -174,8 +193,11 @@ module gbt_voter #(
         in_col_q <= feat_col_i;
         in_row_q <= feat_row_i;
       end
+      chk_valid_q <= in_valid_q;
+      chk_in_roi_q <= in_roi;
+      chk_pixel_q <= pixel;
       pixel_valid_q <= accept;
-      pixel_q <= pixel;
+      pixel_q <= chk_pixel_q;
       word_valid_q <= pixel_valid_q;
       offsets_word_q <= offsets_word;
       pushing_q <= word_valid_q;
@@ -185,8 +207,8 @@ module gbt_voter #(
       end
       // Counted one clock after acceptance (from a register, off the accept path).
       features_q <= features_q + 32'(pixel_valid_q);
-      if (in_valid_q && !in_roi) roi_error_q <= 1'b1;
-      if (in_valid_q && in_roi && !accept) overflow_q <= 1'b1;
+      if (chk_valid_q && !chk_in_roi_q) roi_error_q <= 1'b1;
+      if (chk_valid_q && chk_in_roi_q && !accept) overflow_q <= 1'b1;
     end
   end
 
@@ -200,7 +222,20 @@ module gbt_voter #(
 
   for (genvar k = 0; k < Lanes; k++) begin : g_lane
     wire [RangeWidth-1:0] range = offsets_word_q[k*RangeWidth +: RangeWidth];
-    wire [RangeCountWidth-1:0] count = range[RangeCountWidth-1:0];
+    // I5: the push decision registered, so the FIFO's write enables come
+    // straight from flip-flops.
+    logic                  push_q;
+    logic [RangeWidth-1:0] range_q;
+    always_ff @(posedge clk_i or negedge rst_ni) begin
+      if (!rst_ni) begin
+        push_q <= 1'b0;
+        range_q <= '0;
+      end else begin
+        push_q <= pushing_q && range[RangeCountWidth-1:0] != '0;
+        range_q <= range;
+      end
+    end
+    assign lane_pushing[k] = push_q;
     gbt_vote_lane #(
       .Lanes(Lanes), .LaneIndex(k), .CellsPerLane(CellsPerLane), .RefsPerLane(RefsPerLane), .FifoDepth(FifoDepth),
       .RefsInitFile(InitPrefix == "" ? "" : {InitPrefix, "refs_", 8'(48 + k), ".mem"}),
@@ -208,9 +243,9 @@ module gbt_voter #(
     ) u_lane (
       .clk_i, .rst_ni,
       .clear_i(clear), .cell_count_i, .idle_o(lane_idle[k]),
-      .range_push_i(pushing_q && count != '0),
-      .range_begin_i(range[RangeWidth-1:RangeCountWidth]),
-      .range_count_i(count),
+      .range_push_i(push_q),
+      .range_begin_i(range_q[RangeWidth-1:RangeCountWidth]),
+      .range_count_i(range_q[RangeCountWidth-1:0]),
       .range_free_o(lane_free[k]),
       .best_valid_o(l_best_valid[k]), .best_cell_o(l_best_cell[k]), .best_votes_o(l_best_votes[k]),
       .best_size_o(l_best_size[k]),
@@ -281,7 +316,7 @@ module gbt_voter #(
       StIdle, StDone: if (frame_start_i) state_d = StClear;
       StClear: if (&lane_idle) state_d = StRun;
       StRun: if (frame_end_i || end_pending_q) state_d = StDrain;
-      StDrain: if (!in_valid_q && !pixel_valid_q && !word_valid_q && !pushing_q && (&lane_idle)) state_d = (Lanes == 1) ? StDone : StMerge;
+      StDrain: if (!in_valid_q && !chk_valid_q && !pixel_valid_q && !word_valid_q && !pushing_q && !(|lane_pushing) && (&lane_idle)) state_d = (Lanes == 1) ? StDone : StMerge;
       StMerge: if (Lanes == 1 || (merge_last && merge_advance)) state_d = StDone;  // constant for one lane: merge logic drops out
       default: state_d = StIdle;
     endcase
@@ -372,12 +407,12 @@ module gbt_voter #(
       rejected_q <= '0;
     end else begin
       taken_q <= taken_q + 32'(take);
-      rejected_q <= rejected_q + 32'(in_valid_q && !accept);
+      rejected_q <= rejected_q + 32'(chk_valid_q && !accept);
     end
   end
   /* verilator lint_off SYNCASYNCNET */  // rst_ni only quiets the checks during reset
   always_ff @(posedge clk_i) begin
-    if (rst_ni && !clear) EveryFeatureCounted: assert (taken_q == features_q + rejected_q + 32'(in_valid_q) + 32'(pixel_valid_q));
+    if (rst_ni && !clear) EveryFeatureCounted: assert (taken_q == features_q + rejected_q + 32'(in_valid_q) + 32'(chk_valid_q) + 32'(pixel_valid_q));
     if (rst_ni && take) TakenOnlyWhileRunning: assert (state_q == StRun);
   end
   /* verilator lint_on SYNCASYNCNET */
