@@ -242,7 +242,6 @@ module gbt_vote_lane #(
   logic [LocalCellWidth-1:0] c_cell_q, c_b_cell_q, c_r_cell_q, c_z_cell_q;
   gbt_pkg::count_t           c_votes_q;
   gbt_pkg::size_t            c_size_q;
-  logic                      c_b_valid_q, c_r_valid_q;
   product_t                  c_xb_q, c_bx_q, c_xr_q, c_rx_q, c_xz_q, c_zx_q, c_xy_q, c_yx_q;
 
   // S6 (A) registers.
@@ -283,13 +282,13 @@ module gbt_vote_lane #(
     c_b_cell_q <= best_cell_q;
     c_r_cell_q <= runner_cell_q;
     c_z_cell_q <= a_cell_q;
-    c_b_valid_q <= best_valid_q;
-    c_r_valid_q <= runner_valid_q;
   end
 
   // S5 (C): comparisons and identities; act_q is z's action.
-  wire c_beats_b = !c_b_valid_q || ranks_before_split(c_xb_q, c_bx_q, c_cell_q, c_b_cell_q);
-  wire c_beats_r = !c_r_valid_q || ranks_before_split(c_xr_q, c_rx_q, c_cell_q, c_r_cell_q);
+  // Validity is left to S6, which knows the current best and runner-up's:
+  // beating an empty slot is decided there.
+  wire c_beats_b = ranks_before_split(c_xb_q, c_bx_q, c_cell_q, c_b_cell_q);
+  wire c_beats_r = ranks_before_split(c_xr_q, c_rx_q, c_cell_q, c_r_cell_q);
   wire c_beats_z = ranks_before_split(c_xz_q, c_zx_q, c_cell_q, c_z_cell_q);
   wire c_is_b = c_cell_q == c_b_cell_q;
   wire c_is_r = c_cell_q == c_r_cell_q;
@@ -320,8 +319,8 @@ module gbt_vote_lane #(
     act = ActNone;
     if (a_valid_q) begin
       if (best_valid_q && x_is_best) act = ActBestInPlace;
-      else if (x_beats_best) act = ActNewBest;
-      else if ((runner_valid_q && x_is_runner) || x_beats_runner) act = ActRunner;
+      else if (!best_valid_q || x_beats_best) act = ActNewBest;
+      else if (!runner_valid_q || x_is_runner || x_beats_runner) act = ActRunner;
     end
   end
 

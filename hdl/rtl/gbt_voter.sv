@@ -122,8 +122,8 @@ module gbt_voter #(
   // pixel-index multiply-add, the accept decision and the RAM address apart,
   // one clock each (each was the critical path of the iCE40 build in turn):
   //   I0 (clock t):   a feature is taken and registered
-  //   I1 (clock t+1): ROI comparisons and pixel index registered
-  //   I2 (clock t+2): capacity check, accept or reject
+  //   I1 (clock t+1): ROI comparisons registered; pixel index, first half
+  //   I2 (clock t+2): capacity check, accept or reject; pixel index registered
   //   I3 (clock t+3): offsets RAM read
   //   I4 (clock t+4): offsets word registered (block RAM clock-to-out is slow)
   //   I5 (clock t+5): each lane's range and push decision (non-empty) registered
@@ -133,7 +133,6 @@ module gbt_voter #(
   wire take = feat_valid_i && feat_ready_o;
 
   logic        in_valid_q, chk_valid_q, chk_in_roi_q;
-  logic [PixelWidth-1:0] chk_pixel_q;
   logic [15:0] in_col_q, in_row_q;
   logic [31:0] features_q;
   logic        overflow_q, roi_error_q, pixel_valid_q, pushing_q;
@@ -147,7 +146,10 @@ module gbt_voter #(
   wire accept = chk_valid_q && chk_in_roi_q && room_q;
   // PixelWidth-bit arithmetic is exact whenever in_roi: row * width + col <
   // width * height <= PixelCapacity <= 2^PixelWidth.
-  wire [PixelWidth-1:0] pixel = PixelWidth'(in_row_q) * PixelWidth'(roi_width_i) + PixelWidth'(in_col_q);
+  // Two clocks (I1, I2) in fabric adders: the DSPs all go to the lane.
+  gbt_mul_add #(.WidthBits(PixelWidth)) u_pixel_index (
+    .clk_i, .a_i(PixelWidth'(in_row_q)), .b_i(PixelWidth'(roi_width_i)), .c_i(PixelWidth'(in_col_q)), .y_o(pixel_q)
+  );
 
   logic [Lanes*RangeWidth-1:0] offsets_word, offsets_word_q;
   logic                        word_valid_q;
@@ -163,14 +165,12 @@ module gbt_voter #(
       in_valid_q <= 1'b0;
       chk_valid_q <= 1'b0;
       chk_in_roi_q <= 1'b0;
-      chk_pixel_q <= '0;
       in_col_q <= '0;
       in_row_q <= '0;
       features_q <= '0;
       overflow_q <= 1'b0;
       roi_error_q <= 1'b0;
       pixel_valid_q <= 1'b0;
-      pixel_q <= '0;
       word_valid_q <= 1'b0;
       offsets_word_q <= '0;
       pushing_q <= 1'b0;
@@ -195,9 +195,7 @@ module gbt_voter #(
       end
       chk_valid_q <= in_valid_q;
       chk_in_roi_q <= in_roi;
-      chk_pixel_q <= pixel;
       pixel_valid_q <= accept;
-      pixel_q <= chk_pixel_q;
       word_valid_q <= pixel_valid_q;
       offsets_word_q <= offsets_word;
       pushing_q <= word_valid_q;

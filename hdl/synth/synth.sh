@@ -33,7 +33,7 @@ for lanes in $lanes_list; do
   d=$out/lanes$lanes
   mkdir -p "$d"
   "$gabarit" tables export-hdl "$table" --out "$d/table" --lanes "$lanes" 2>>"$d/export.log"
-  srcs="$d/table/gabarit_table_pkg.sv $rtl/gbt_pkg.sv $rtl/gbt_sync_ram.sv $rtl/gbt_fifo.sv $rtl/gbt_vote_lane.sv $rtl/gbt_voter.sv $rtl/gbt_voter_table.sv $here/gbt_synth_top.sv"
+  srcs="$d/table/gabarit_table_pkg.sv $rtl/gbt_pkg.sv $rtl/gbt_sync_ram.sv $rtl/gbt_fifo.sv $rtl/gbt_mul_add.sv $rtl/gbt_vote_lane.sv $rtl/gbt_voter.sv $rtl/gbt_voter_table.sv $here/gbt_synth_top.sv"
   # -noassert: the RTL's assertions are for simulation and formal, not silicon.
   yosys -q -l "$d/yosys_ice40.log" -p "read_verilog -sv -noassert $srcs; synth_ice40 -top gbt_synth_top -dsp -spram -json $d/voter.json; tee -o $d/ice40_stat.txt stat" >/dev/null
   # Generic flow, stopped before fine-grain mapping: memories stay memory cells.
