@@ -53,10 +53,23 @@ module gbt_fifo #(
   end
 
 `ifdef FORMAL
-  // Proved by hdl/formal/fifo.sh with yosys-smtbmc (BMC and k-induction).
-  // The FIFO never looks at its data, so proving it with each word equal to
-  // its push's sequence number covers any data: every word comes out once,
-  // in the order it went in, and the occupancy is pushes minus pops.
+  // Invariants that hold whatever the data, proved wherever the FIFO is
+  // instantiated in a proof (hdl/formal/fifo.sh, hdl/formal/lane.sh).
+  always_comb begin
+    if (rst_ni) begin
+      assert (used_q <= (PtrWidth + 1)'(Depth));
+      assert (empty_q == (used_q == '0));
+      assert (wr_q == PtrWidth'(rd_q + used_q[PtrWidth-1:0]));
+    end
+  end
+`endif
+
+`ifdef FORMAL_FIFO
+  // Proved by hdl/formal/fifo.sh with yosys-smtbmc (BMC and k-induction),
+  // with the FIFO as the top. The FIFO never looks at its data, so proving it
+  // with each word equal to its push's sequence number covers any data:
+  // every word comes out once, in the order it went in, and the occupancy is
+  // pushes minus pops.
   logic [WidthBits-1:0] f_pushed_q, f_popped_q;
   // The run starts in reset.
   logic f_started_q = 1'b0;
@@ -74,10 +87,7 @@ module gbt_fifo #(
   always_comb begin
     if (rst_ni) begin
       assume (wdata_i == f_pushed_q);
-      assert (used_q <= (PtrWidth + 1)'(Depth));
-      assert (empty_q == (used_q == '0));
       assert (f_pushed_q - f_popped_q == WidthBits'(used_q));  // at full width, not modulo the depth
-      assert (wr_q == PtrWidth'(rd_q + used_q[PtrWidth-1:0]));
       if (!empty_o) assert (rdata_o == f_popped_q);
     end
   end

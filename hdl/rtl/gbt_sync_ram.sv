@@ -27,7 +27,14 @@ module gbt_sync_ram #(
   output logic [WidthBits-1:0] rdata_o,
   input  logic                 we_i,
   input  logic [AddrWidth-1:0] waddr_i,
-  input  logic [WidthBits-1:0] wdata_i
+  input  logic [WidthBits-1:0] wdata_i,
+  // Formal proofs only (hdl/formal): peek_data_o = mem[peek_addr_i],
+  // combinational, so a proof can state what a word holds. Tie peek_addr_i
+  // to '0 and leave peek_data_o open; outside `FORMAL` it is constant zero.
+  /* verilator lint_off UNUSEDSIGNAL */
+  input  logic [AddrWidth-1:0] peek_addr_i,
+  /* verilator lint_on UNUSEDSIGNAL */
+  output logic [WidthBits-1:0] peek_data_o
 );
 
   logic [WidthBits-1:0] mem [Depth];
@@ -50,6 +57,12 @@ module gbt_sync_ram #(
       rdata_o <= mem[raddr_i];
     end
   end
+
+`ifdef FORMAL
+  assign peek_data_o = mem[peek_addr_i];
+`else
+  assign peek_data_o = '0;
+`endif
 
 `ifndef SYNTHESIS
   // Every access stays inside the memory (Depth need not be a power of two).

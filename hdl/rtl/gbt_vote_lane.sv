@@ -106,7 +106,8 @@ module gbt_vote_lane #(
       gen_last_q <= head_count == RangeCountWidth'(1);
     end else if (gen_active_q) begin
       gen_active_q <= !last_ref;
-      gen_addr_q <= gen_addr_q + 1'b1;
+      // Held on the last reference, so the refs address stays in range.
+      if (!last_ref) gen_addr_q <= gen_addr_q + 1'b1;
       gen_left_q <= gen_left_q - 1'b1;
       gen_last_q <= gen_left_q == RangeCountWidth'(2);
     end
@@ -117,7 +118,11 @@ module gbt_vote_lane #(
   logic s2_valid_q;
   gbt_sync_ram #(.Depth(RefsPerLane), .WidthBits(LocalCellWidth), .InitFile(RefsInitFile), .SinglePort(1'b1)) u_refs (
     .clk_i, .raddr_i(gen_addr_q[RefAddrWidth-1:0]), .rdata_o(s2_cell),
-    .we_i(tbl_refs_we_i), .waddr_i(tbl_addr_i[RefAddrWidth-1:0]), .wdata_i(tbl_data_i[LocalCellWidth-1:0])
+    .we_i(tbl_refs_we_i), .waddr_i(tbl_addr_i[RefAddrWidth-1:0]), .wdata_i(tbl_data_i[LocalCellWidth-1:0]),
+    // The peek port is for formal proofs only (see gbt_sync_ram).
+    /* verilator lint_off PINCONNECTEMPTY */
+    .peek_addr_i('0), .peek_data_o()
+    /* verilator lint_on PINCONNECTEMPTY */
   );
 
   // ------------------------------------------------- S3: counters and sizes
@@ -140,13 +145,23 @@ module gbt_vote_lane #(
   assign cnt_waddr = clearing_q ? clear_addr_q : s3_cell_q;
   assign cnt_wdata = clearing_q ? '0 : s3_new;
 
+  // The formal proof (below) peeks at one counter; elsewhere the peek is unused.
+  logic [LocalCellWidth-1:0] f_peek_cell;
+  /* verilator lint_off UNUSEDSIGNAL */
+  gbt_pkg::count_t           f_peek_count;
+  /* verilator lint_on UNUSEDSIGNAL */
   gbt_sync_ram #(.Depth(CellsPerLane), .WidthBits(gbt_pkg::CounterWidthBits)) u_counters (
     .clk_i, .raddr_i(cnt_raddr), .rdata_o(cnt_rdata),
-    .we_i(cnt_we), .waddr_i(cnt_waddr), .wdata_i(cnt_wdata)
+    .we_i(cnt_we), .waddr_i(cnt_waddr), .wdata_i(cnt_wdata),
+    .peek_addr_i(f_peek_cell), .peek_data_o(f_peek_count)
   );
   gbt_sync_ram #(.Depth(CellsPerLane), .WidthBits(gbt_pkg::SizeWidthBits), .InitFile(SizesInitFile), .SinglePort(1'b1)) u_sizes (
     .clk_i, .raddr_i(s2_cell), .rdata_o(size_rdata),
-    .we_i(tbl_sizes_we_i), .waddr_i(tbl_addr_i[LocalCellWidth-1:0]), .wdata_i(tbl_data_i[gbt_pkg::SizeWidthBits-1:0])
+    .we_i(tbl_sizes_we_i), .waddr_i(tbl_addr_i[LocalCellWidth-1:0]), .wdata_i(tbl_data_i[gbt_pkg::SizeWidthBits-1:0]),
+    // The peek port is for formal proofs only (see gbt_sync_ram).
+    /* verilator lint_off PINCONNECTEMPTY */
+    .peek_addr_i('0), .peek_data_o()
+    /* verilator lint_on PINCONNECTEMPTY */
   );
   assign cnt_rdata_o = cnt_rdata;
 
@@ -405,6 +420,8 @@ module gbt_vote_lane #(
   // the intake's slack rule never pushes into a full FIFO.
   // Assertions look at rst_ni only to stay quiet during reset; no logic is
   // built from that synchronous use.
+`ifndef FORMAL
+  assign f_peek_cell = '0;
   /* verilator lint_off SYNCASYNCNET */
   always_ff @(posedge clk_i) begin
     if (rst_ni && s3_valid_q && !clearing_q) begin
@@ -415,6 +432,81 @@ module gbt_vote_lane #(
     if (rst_ni && range_push_i) NoPushWhenFull: assert (!fifo_full);
   end
   /* verilator lint_on SYNCASYNCNET */
+`else
+  // Proved by hdl/formal/lane.sh with yosys-smtbmc (BMC and k-induction) on
+  // a small instance. The environment is what gbt_voter guarantees: clear
+  // only while idle, no push into a full FIFO or while clearing, ranges
+  // non-empty and inside the refs memory, the table not written mid-frame;
+  // and a valid table (references name cells of the bank). The memories'
+  // own assertions (gbt_sync_ram: every read and write address in range)
+  // are proved along.
+  logic f_started_q = 1'b0;
+  always_ff @(posedge clk_i) f_started_q <= 1'b1;
+  // With the lane as the proof's top (FORMAL_LANE) these are assumptions;
+  // inside gbt_voter's proof they are obligations the voter must meet.
+`ifdef FORMAL_LANE
+  `define GBT_LANE_ENV(expr) assume (expr)
+`else
+  `define GBT_LANE_ENV(expr) assert (expr)
+`endif
+  always_comb begin
+    if (!f_started_q) assume (!rst_ni);
+    if (rst_ni && clear_i) `GBT_LANE_ENV(idle_o);
+    if (rst_ni && range_push_i) begin
+      `GBT_LANE_ENV(!fifo_full && !clearing_q && !clear_i);
+      `GBT_LANE_ENV(range_count_i != '0);
+      `GBT_LANE_ENV(32'(range_begin_i) + 32'(range_count_i) <= RefsPerLane);
+    end
+    assume (!tbl_refs_we_i && !tbl_sizes_we_i);
+    // A valid table: every word of the refs memory is a cell of this bank.
+    assume (32'(s2_cell) < CellsPerLane);
+    // The FIFO hands out what was pushed (hdl/formal/fifo.sh proves it), so
+    // its head is a range that was assumed valid on the way in.
+    if (!fifo_empty) assume (head_count != '0 && 32'(head_begin) + 32'(head_count) <= RefsPerLane);
+    // The readback port's contract.
+    assume (32'(cnt_raddr_i) < CellsPerLane);
+  end
+
+  // One counter, chosen by the solver (so the proof covers every counter),
+  // shadowed: f_shadow_q is what its RAM word holds once written.
+  (* anyconst *) logic [LocalCellWidth-1:0] f_cell;
+  assign f_peek_cell = f_cell;
+  logic            f_known_q;
+  gbt_pkg::count_t f_shadow_q;
+  always_ff @(posedge clk_i or negedge rst_ni) begin
+    if (!rst_ni) f_known_q <= 1'b0;
+    else if (cnt_we && cnt_waddr == f_cell) begin
+      f_known_q <= 1'b1;
+      f_shadow_q <= cnt_wdata;
+    end
+  end
+
+  always_comb begin
+    if (rst_ni) begin
+      // Addresses in range: the refs address while generating, the counter
+      // address while clearing.
+      if (gen_active_q) assert (32'(gen_addr_q) < RefsPerLane);
+      if (gen_active_q) assert (gen_left_q != '0 && gen_last_q == (gen_left_q == RangeCountWidth'(1)));
+      if (clearing_q) assert (32'(clear_addr_q) < CellsPerLane);
+      // The read-modify-write sees the counter's current value (forwarding
+      // is right), so each vote writes that value plus one, or the
+      // saturated maximum: a counter never decreases and never wraps
+      // between clears.
+      if (s3_valid_q && s3_cell_q == f_cell && f_known_q) begin
+        assert (s3_old == f_shadow_q);
+        assert (s3_new == ((f_shadow_q == '1) ? f_shadow_q : f_shadow_q + 1'b1));
+      end
+      // Helpers for the induction: the RAM word holds the shadow, S4 holds
+      // what S3 wrote last clock, and the early forwarding flag agrees with
+      // the cells, generator state is a valid range.
+      if (f_known_q) assert (f_peek_count == f_shadow_q);
+      if (gen_active_q) assert (32'(gen_addr_q) + 32'(gen_left_q) <= RefsPerLane);
+      if (s4_valid_q && s4_cell_q == f_cell && f_known_q) assert (s4_votes_q == f_shadow_q);
+      if (s3_valid_q) assert (s3_fwd_q == (s4_valid_q && s4_cell_q == s3_cell_q));
+      if (clearing_q || s2_valid_q || s3_valid_q) assert (!(clearing_q && (s2_valid_q || s3_valid_q)));
+    end
+  end
+`endif
 
 endmodule
 

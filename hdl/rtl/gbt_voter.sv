@@ -157,7 +157,11 @@ module gbt_voter #(
                  .InitFile(InitPrefix == "" ? "" : {InitPrefix, "offsets.mem"})) u_offsets (
     .clk_i, .raddr_i(pixel_q), .rdata_o(offsets_word),
     .we_i(tbl_we_i && tbl_sel_i == 2'd0), .waddr_i(tbl_addr_i[PixelWidth-1:0]),
-    .wdata_i(tbl_data_i[Lanes*RangeWidth-1:0])
+    .wdata_i(tbl_data_i[Lanes*RangeWidth-1:0]),
+    // The peek port is for formal proofs only (see gbt_sync_ram).
+    /* verilator lint_off PINCONNECTEMPTY */
+    .peek_addr_i('0), .peek_data_o()
+    /* verilator lint_on PINCONNECTEMPTY */
   );
 
   always_ff @(posedge clk_i or negedge rst_ni) begin
@@ -414,6 +418,45 @@ module gbt_voter #(
     if (rst_ni && take) TakenOnlyWhileRunning: assert (state_q == StRun);
   end
   /* verilator lint_on SYNCASYNCNET */
+`endif
+
+`ifdef FORMAL
+  // Proved by hdl/formal/voter.sh with yosys-smtbmc on a small instance,
+  // together with each lane's proof (gbt_vote_lane: its environment becomes
+  // an obligation here) and EveryFeatureCounted above. Assumed: a loaded,
+  // valid table that is not rewritten, and ROI inputs that hold still.
+  logic f_started_q = 1'b0;
+  always_ff @(posedge clk_i) f_started_q <= 1'b1;
+  (* anyconst *) logic [31:0] f_cell_count;
+  (* anyconst *) logic [15:0] f_roi_width, f_roi_height;
+  always_comb begin
+    if (!f_started_q) assume (!rst_ni);
+    assume (!tbl_we_i);
+    assume (cell_count_i == f_cell_count && f_cell_count >= 1 && f_cell_count <= CellCapacity);
+    assume (roi_width_i == f_roi_width && roi_height_i == f_roi_height);
+    assume (32'(f_roi_width) * 32'(f_roi_height) <= PixelCapacity);
+    assume (cnt_cell_i < CellCapacity);
+    // Helpers for the induction. Between frames nothing is in flight; the
+    // intake's slack: each lane's FIFO has room for every feature in flight
+    // towards it, and one clock after room_all_q was set, for one more.
+    if (rst_ni) begin
+      if (state_q == StIdle || state_q == StDone || state_q == StMerge)
+        assert ((&lane_idle) && !in_valid_q && !chk_valid_q && !pixel_valid_q && !word_valid_q && !pushing_q && !(|lane_pushing));
+      if (state_q == StClear)
+        assert (!in_valid_q && !chk_valid_q && !pixel_valid_q && !word_valid_q && !pushing_q && !(|lane_pushing));
+      for (int k = 0; k < Lanes; k++) begin
+        assert (32'(lane_free[k]) >= 32'(in_valid_q) + 32'(chk_valid_q) + 32'(pixel_valid_q) + 32'(word_valid_q)
+                                    + 32'(pushing_q) + 32'(lane_pushing[k]));
+        if (room_all_q) assert (32'(lane_free[k]) >= 7);
+      end
+    end
+    // Every offsets word read for a pixel holds ranges inside each lane's refs.
+    for (int k = 0; k < Lanes; k++) begin
+      if (word_valid_q)
+        assume (32'(offsets_word[k*RangeWidth+RangeCountWidth +: OffsetWidth]) + 32'(offsets_word[k*RangeWidth +: RangeCountWidth])
+                <= RefsPerLane);
+    end
+  end
 `endif
 
 endmodule
