@@ -29,12 +29,13 @@ module gbt_vote_lane #(
   parameter int unsigned CellsPerLane = 121,
   parameter int unsigned RefsPerLane = 1024,
   parameter int unsigned FifoDepth = 16,
+  parameter int unsigned MaxRangeCount = 0,  // longest range pushed; 0 = CellsPerLane
   parameter RefsInitFile = "",   // strings (untyped for yosys 0.23)
   parameter SizesInitFile = "",
   localparam int unsigned LocalCellWidth = (CellsPerLane > 1) ? $clog2(CellsPerLane) : 1,
   localparam int unsigned RefAddrWidth = (RefsPerLane > 1) ? $clog2(RefsPerLane) : 1,
   localparam int unsigned OffsetWidth = $clog2(RefsPerLane + 1),
-  localparam int unsigned RangeCountWidth = $clog2(CellsPerLane + 1),
+  localparam int unsigned RangeCountWidth = $clog2(((MaxRangeCount == 0) ? CellsPerLane : MaxRangeCount) + 1),
   localparam int unsigned FreeWidth = $clog2(FifoDepth) + 1
 ) (
   input  logic clk_i,

@@ -37,11 +37,12 @@ module gbt_voter #(
   parameter int unsigned RefsPerLane = 32768,       // cell_count_i / roi_*_i inputs
   parameter int unsigned MaxFeaturesPerFrame = 65535,
   parameter int unsigned FifoDepth = 16,
+  parameter int unsigned MaxRangeCount = 0,         // references of one pixel in one lane; 0 = CellsPerLane
   parameter InitPrefix = "",                        // "<dir>/": offsets.mem, refs_<k>.mem, sizes_<k>.mem
   localparam int unsigned CellsPerLane = (CellCapacity + Lanes - 1) / Lanes,
   localparam int unsigned PixelWidth = (PixelCapacity > 1) ? $clog2(PixelCapacity) : 1,
   localparam int unsigned OffsetWidth = $clog2(RefsPerLane + 1),
-  localparam int unsigned RangeCountWidth = $clog2(CellsPerLane + 1),
+  localparam int unsigned RangeCountWidth = $clog2(((MaxRangeCount == 0) ? CellsPerLane : MaxRangeCount) + 1),
   localparam int unsigned RangeWidth = OffsetWidth + RangeCountWidth,
   localparam int unsigned LocalCellWidth = (CellsPerLane > 1) ? $clog2(CellsPerLane) : 1,
   localparam int unsigned LaneWidth = (Lanes > 1) ? $clog2(Lanes) : 1,
@@ -240,6 +241,7 @@ module gbt_voter #(
     assign lane_pushing[k] = push_q;
     gbt_vote_lane #(
       .Lanes(Lanes), .LaneIndex(k), .CellsPerLane(CellsPerLane), .RefsPerLane(RefsPerLane), .FifoDepth(FifoDepth),
+      .MaxRangeCount(MaxRangeCount),
       .RefsInitFile(InitPrefix == "" ? "" : {InitPrefix, "refs_", 8'(48 + k), ".mem"}),
       .SizesInitFile(InitPrefix == "" ? "" : {InitPrefix, "sizes_", 8'(48 + k), ".mem"})
     ) u_lane (

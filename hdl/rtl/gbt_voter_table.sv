@@ -54,6 +54,7 @@ module gbt_voter_table #(
     .CellCapacity(gabarit_table_pkg::CellCapacity),
     .PixelCapacity(gabarit_table_pkg::PixelCapacity),
     .RefsPerLane(gabarit_table_pkg::RefsPerLane),
+    .MaxRangeCount(gabarit_table_pkg::MaxRangeCount),
     .MaxFeaturesPerFrame(MaxFeaturesPerFrame),
     .InitPrefix(InitPrefix)
   ) u_voter (

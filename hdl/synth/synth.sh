@@ -5,6 +5,8 @@
 # -spram: UltraPlus DSPs and SPRAM) and a generic `synth`, then nextpnr-ice40
 # for the UP5K (sg48) with a 48 MHz target. Writes OUTDIR/report.md with LUTs,
 # memory blocks, DSPs, Fmax and votes per second (lanes x Fmax).
+# EXPORT_ARGS (optional): more `tables export-hdl` options, e.g. "--range-count 3"
+# for narrow offsets words.
 set -euo pipefail
 table=${1:?usage: synth.sh TABLE.gbt OUTDIR [LANES...]}
 out=${2:?usage: synth.sh TABLE.gbt OUTDIR [LANES...]}
@@ -32,7 +34,8 @@ PY
 for lanes in $lanes_list; do
   d=$out/lanes$lanes
   mkdir -p "$d"
-  "$gabarit" tables export-hdl "$table" --out "$d/table" --lanes "$lanes" 2>>"$d/export.log"
+  # shellcheck disable=SC2086  # EXPORT_ARGS is words, e.g. "--range-count 3"
+  "$gabarit" tables export-hdl "$table" --out "$d/table" --lanes "$lanes" ${EXPORT_ARGS:-} 2>>"$d/export.log"
   srcs="$d/table/gabarit_table_pkg.sv $rtl/gbt_pkg.sv $rtl/gbt_sync_ram.sv $rtl/gbt_fifo.sv $rtl/gbt_mul_add.sv $rtl/gbt_vote_lane.sv $rtl/gbt_voter.sv $rtl/gbt_voter_table.sv $here/gbt_synth_top.sv"
   # -noassert: the RTL's assertions are for simulation and formal, not silicon.
   yosys -q -l "$d/yosys_ice40.log" -p "read_verilog -sv -noassert $srcs; synth_ice40 -top gbt_synth_top -dsp -spram -json $d/voter.json; tee -o $d/ice40_stat.txt stat" >/dev/null

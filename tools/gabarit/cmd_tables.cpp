@@ -161,7 +161,9 @@ int tables_export_hdl(const std::vector<std::string>& argv) {
              {"--lanes", "N", "voting lanes: 1, 2, 4 or 8 (default 1)"},
              {"--cells", "N", "voter CellCapacity the images are for (default: the table's cell count)"},
              {"--pixels", "N", "voter PixelCapacity (default: the table's ROI pixels)"},
-             {"--refs-per-lane", "N", "voter RefsPerLane (default: the table's largest lane)"}},
+             {"--refs-per-lane", "N", "voter RefsPerLane (default: the table's largest lane)"},
+             {"--range-count", "N", "voter MaxRangeCount: references of one pixel in one lane (default: all the\n"
+                                    "lane's cells); a smaller one narrows the offsets words"}},
             "TABLE");
   if (!args.parse(argv)) return 0;
   if (args.positionals().size() != 1) throw UsageError("give exactly one TABLE");
@@ -177,6 +179,7 @@ int tables_export_hdl(const std::vector<std::string>& argv) {
   cap.cells = static_cast<std::uint32_t>(args.integer("--cells", 0, 1, table_format::kMaxCells));
   cap.pixels = static_cast<std::uint32_t>(args.integer("--pixels", 0, 1, table_format::kMaxRoiPixels));
   cap.refs_per_lane = static_cast<std::uint32_t>(args.integer("--refs-per-lane", 0, 1, table_format::kMaxReferences));
+  cap.range_count = static_cast<std::uint32_t>(args.integer("--range-count", 0, 1, table_format::kMaxCells));
   std::fprintf(stderr, "%s\n", host::write_hdl_export(host::hdl_layout(view, lanes), args.get("--out"), cap).c_str());
   return 0;
 }

@@ -16,6 +16,13 @@ std::uint32_t HdlLayout::max_lane_refs() const {
   return static_cast<std::uint32_t>(m);
 }
 
+std::uint32_t HdlLayout::max_range_count() const {
+  std::uint32_t m = 0;
+  for (const auto& pixel : ranges)
+    for (const HdlRange& r : pixel) m = std::max(m, r.count);
+  return m;
+}
+
 HdlLayout hdl_layout(const TableView& t, std::uint32_t lanes) {
   if (lanes != 1 && lanes != 2 && lanes != 4 && lanes != 8) throw Error("--lanes must be 1, 2, 4 or 8");
   HdlLayout l;
@@ -44,9 +51,11 @@ HdlLayout hdl_layout(const TableView& t, std::uint32_t lanes) {
   return l;
 }
 
-HdlWidths hdl_widths(std::uint32_t lanes, std::uint32_t cell_capacity, std::uint32_t refs_per_lane) {
+HdlWidths hdl_widths(std::uint32_t lanes, std::uint32_t cell_capacity, std::uint32_t refs_per_lane,
+                     std::uint32_t max_range_count) {
   const std::uint32_t cells_per_lane = (cell_capacity + lanes - 1) / lanes;
-  return {clog2(std::uint64_t{refs_per_lane} + 1), clog2(std::uint64_t{cells_per_lane} + 1)};
+  const std::uint32_t count_max = max_range_count == 0 ? cells_per_lane : max_range_count;
+  return {clog2(std::uint64_t{refs_per_lane} + 1), clog2(std::uint64_t{count_max} + 1)};
 }
 
 std::vector<std::uint32_t> hdl_offsets_word(const HdlLayout& l, std::uint32_t pixel, const HdlWidths& w) {
@@ -90,14 +99,16 @@ std::string write_hdl_export(const HdlLayout& l, const std::string& dir, HdlCapa
   if (cap.cells == 0) cap.cells = l.cell_count;
   if (cap.pixels == 0) cap.pixels = static_cast<std::uint32_t>(l.ranges.size());
   if (cap.refs_per_lane == 0) cap.refs_per_lane = std::max<std::uint32_t>(1, l.max_lane_refs());
-  if (l.cell_count > cap.cells || l.ranges.size() > cap.pixels || l.max_lane_refs() > cap.refs_per_lane) {
+  if (l.cell_count > cap.cells || l.ranges.size() > cap.pixels || l.max_lane_refs() > cap.refs_per_lane ||
+      (cap.range_count != 0 && l.max_range_count() > cap.range_count)) {
     throw Error("table (" + std::to_string(l.cell_count) + " cells, " + std::to_string(l.ranges.size()) + " pixels, " +
                 std::to_string(l.max_lane_refs()) + " refs per lane) exceeds the capacities (" + std::to_string(cap.cells) +
-                ", " + std::to_string(cap.pixels) + ", " + std::to_string(cap.refs_per_lane) + ")");
+                ", " + std::to_string(cap.pixels) + ", " + std::to_string(cap.refs_per_lane) + ")" +
+                (cap.range_count != 0 ? " or a pixel's range exceeds " + std::to_string(cap.range_count) + " references" : ""));
   }
   std::filesystem::create_directories(dir);
   const std::uint32_t refs_per_lane = cap.refs_per_lane;
-  const HdlWidths w = hdl_widths(l.lanes, cap.cells, refs_per_lane);
+  const HdlWidths w = hdl_widths(l.lanes, cap.cells, refs_per_lane, cap.range_count);
   const std::uint32_t cells_per_lane_cap = (cap.cells + l.lanes - 1) / l.lanes;
   std::vector<std::vector<std::uint32_t>> offsets;
   for (std::uint32_t p = 0; p < l.ranges.size(); ++p) offsets.push_back(hdl_offsets_word(l, p, w));
@@ -122,6 +133,7 @@ std::string write_hdl_export(const HdlLayout& l, const std::string& dir, HdlCapa
       << "  localparam int unsigned RoiHeight = " << l.roi_height << ";\n"
       << "  localparam int unsigned PixelCapacity = " << cap.pixels << ";\n"
       << "  localparam int unsigned RefsPerLane = " << refs_per_lane << ";\n"
+      << "  localparam int unsigned MaxRangeCount = " << cap.range_count << ";  // 0: every cell of a lane\n"
       << "  localparam int unsigned OffsetWidth = " << w.offset_bits << ";\n"
       << "  localparam int unsigned RangeCountWidth = " << w.count_bits << ";\n"
       << "  localparam int unsigned MemoryBits = " << memory_bits << ";  // all voter memories\n"

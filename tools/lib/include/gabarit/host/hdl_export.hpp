@@ -28,6 +28,7 @@ struct HdlLayout {
   std::vector<std::vector<std::uint32_t>> refs;   // [lane] local cell indices
   std::vector<std::vector<std::uint32_t>> sizes;  // [lane] sizes of local cells, clamped to [1, 65535]
   std::uint32_t max_lane_refs() const;
+  std::uint32_t max_range_count() const;  // the longest {begin, count} range of any pixel and lane
 };
 
 // Throws Error for lanes other than 1, 2, 4, 8 or stencils above 65535 pixels.
@@ -40,20 +41,24 @@ constexpr std::uint32_t clog2(std::uint64_t n) {
   return b;
 }
 
-// Field widths of gbt_voter for given capacities (its localparams).
+// Field widths of gbt_voter for given capacities (its localparams);
+// max_range_count 0 means a range may hold every cell of a lane.
 struct HdlWidths {
   std::uint32_t offset_bits, count_bits;
   std::uint32_t range_bits() const { return offset_bits + count_bits; }
 };
-HdlWidths hdl_widths(std::uint32_t lanes, std::uint32_t cell_capacity, std::uint32_t refs_per_lane);
+HdlWidths hdl_widths(std::uint32_t lanes, std::uint32_t cell_capacity, std::uint32_t refs_per_lane,
+                     std::uint32_t max_range_count = 0);
 
 // Offsets word of one pixel, as 32-bit chunks, least significant first.
 std::vector<std::uint32_t> hdl_offsets_word(const HdlLayout& layout, std::uint32_t pixel, const HdlWidths& widths);
 
 // Hardware capacities the images are written for (the voter's CellCapacity,
-// PixelCapacity, RefsPerLane); 0 = exactly this table's sizes.
+// PixelCapacity, RefsPerLane); 0 = exactly this table's sizes. range_count
+// is the voter's MaxRangeCount: 0 = a range may hold every cell of a lane
+// (any table of the capacities fits); narrower offsets words otherwise.
 struct HdlCapacities {
-  std::uint32_t cells = 0, pixels = 0, refs_per_lane = 0;
+  std::uint32_t cells = 0, pixels = 0, refs_per_lane = 0, range_count = 0;
 };
 
 // Writes offsets.mem, refs_<k>.mem, sizes_<k>.mem and gabarit_table_pkg.sv
