@@ -265,8 +265,8 @@ module gbt_vote_lane #(
   logic [LocalCellWidth-1:0] a_cell_q;
   gbt_pkg::count_t           a_votes_q;
   gbt_pkg::size_t            a_size_q;
-  logic                      a_beats_b_q, a_beats_r_q, a_beats_y_q, a_is_b_q, a_is_r_q, a_is_y_q;
-  action_e                   act_q;  // S6's action one clock ago
+  logic                      a_beats_b_q, a_beats_r_q, a_beats_z_q, a_beats_y_q, a_is_b_q, a_is_r_q, a_is_y_q;
+  action_e                   act_q, act_qq;  // S6's action one and two clocks ago
 
   // x ranks before c given the two products and the tie-break (lower local
   // index wins): {x_c, ~cell_x} > {c_x, ~cell_c} as two 16-bit halves.
@@ -311,9 +311,13 @@ module gbt_vote_lane #(
   wire c_is_z = c_cell_q == c_z_cell_q;
   wire z_is_best = act_q == ActBestInPlace || act_q == ActNewBest;
   always_ff @(posedge clk_i) begin
-    a_beats_b_q <= z_is_best ? c_beats_z : c_beats_b;
+    // The comparisons go to S6 as they are (they end long carry chains; S6
+    // picks by z's action, act_qq there); the identities, short, are picked
+    // here.
+    a_beats_b_q <= c_beats_b;
+    a_beats_r_q <= c_beats_r;
+    a_beats_z_q <= c_beats_z;
     a_is_b_q <= z_is_best ? c_is_z : c_is_b;
-    a_beats_r_q <= (act_q == ActNewBest) ? c_beats_b : ((act_q == ActRunner) ? c_beats_z : c_beats_r);
     a_is_r_q <= (act_q == ActNewBest) ? c_is_b : ((act_q == ActRunner) ? c_is_z : c_is_r);
     a_beats_y_q <= ranks_before_split(c_xy_q, c_yx_q, c_cell_q, a_cell_q);  // y is in S6 now
     a_is_y_q <= c_cell_q == a_cell_q;
@@ -322,13 +326,16 @@ module gbt_vote_lane #(
     a_size_q <= c_size_q;
   end
 
-  // S6 (A): act_q is y's action; a_*_b/a_*_r describe the best and runner-up
-  // after z.
+  // S6 (A): act_qq is z's action, act_q y's; a_is_b/a_is_r already describe
+  // the best and runner-up after z, the comparisons are picked here.
+  wire z_was_best     = act_qq == ActBestInPlace || act_qq == ActNewBest;
+  wire beats_b1       = z_was_best ? a_beats_z_q : a_beats_b_q;
+  wire beats_r1       = (act_qq == ActNewBest) ? a_beats_b_q : ((act_qq == ActRunner) ? a_beats_z_q : a_beats_r_q);
   wire y_is_best      = act_q == ActBestInPlace || act_q == ActNewBest;
   wire x_is_best      = y_is_best ? a_is_y_q : a_is_b_q;
-  wire x_beats_best   = y_is_best ? a_beats_y_q : a_beats_b_q;
+  wire x_beats_best   = y_is_best ? a_beats_y_q : beats_b1;
   wire x_is_runner    = (act_q == ActNewBest) ? a_is_b_q : ((act_q == ActRunner) ? a_is_y_q : a_is_r_q);
-  wire x_beats_runner = (act_q == ActNewBest) ? a_beats_b_q : ((act_q == ActRunner) ? a_beats_y_q : a_beats_r_q);
+  wire x_beats_runner = (act_q == ActNewBest) ? beats_b1 : ((act_q == ActRunner) ? a_beats_y_q : beats_r1);
 
   action_e act;
   always_comb begin
@@ -362,6 +369,7 @@ module gbt_vote_lane #(
       runner_size_q <= '0;
       votes_q <= '0;
       act_q <= ActNone;
+      act_qq <= ActNone;
     end else if (clear_i) begin
       // Zero votes everywhere: the kernel's order is then the cell index.
       best_valid_q <= LaneIndex < cell_count_i;
@@ -374,6 +382,7 @@ module gbt_vote_lane #(
       runner_size_q <= gbt_pkg::SizeWidthBits'(1);
       votes_q <= '0;
       act_q <= ActNone;
+      act_qq <= ActNone;
     end else begin
       if (s3_valid_q) votes_q <= votes_q + 1;
       unique case (act)
@@ -401,6 +410,7 @@ module gbt_vote_lane #(
         default: ;
       endcase
       act_q <= act;
+      act_qq <= act_q;
     end
   end
 
