@@ -3,8 +3,9 @@
 //   cycle t:   raddr_i presented (re implied), waddr_i/wdata_i/we_i presented
 //   cycle t+1: rdata_o = mem[raddr] as it was *before* the write of cycle t
 //
-// Read-first behaviour is what the voter's forwarding logic assumes (a read
-// and a write of the same address in one cycle returns the old word). This
+// Simulated read-first (a read and a write of the same address in one cycle
+// return the old word); synthesised with the collision left unspecified
+// (no_rw_check, below), which the voter tolerates. This
 // is the block-RAM template yosys maps to iCE40 EBR and Verilator simulates
 // directly. InitFile, when not empty, is loaded with $readmemh.
 //
@@ -37,6 +38,13 @@ module gbt_sync_ram #(
   output logic [WidthBits-1:0] peek_data_o
 );
 
+  // no_rw_check: on an FPGA, a read that collides with a write to the same
+  // word may return either word, so yosys adds no bypass logic for the
+  // read-first behaviour. The voter never uses such a word: a collision is a
+  // vote reading the counter the previous vote is writing, and the
+  // forwarding replaces it (the lane's formal proof covers this). Verilator
+  // still simulates read-first.
+  (* no_rw_check *)
   logic [WidthBits-1:0] mem [Depth];
 
   // No zeroing loop: FPGA block RAMs power up as zero (and yosys would unroll

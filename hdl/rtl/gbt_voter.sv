@@ -23,8 +23,9 @@
 //     seven free FIFO slots in every lane (six in flight), seen one clock
 //     earlier (ready is registered).
 //   frame_end_i (pulse, any time after frame_start_i, even while clearing —
-//     it is latched): the pipelines drain, the lanes' top-2 lists merge
-//     (at most 4*Lanes clocks; none with one lane), then result_valid_o stays high with
+//     it is latched): the pipelines drain, each lane merges its top-2 ring
+//     (31 clocks), the lanes' top-2 lists merge (at most 4*Lanes clocks; none
+//     with one lane), then result_valid_o stays high with
 //     best/runner/votes/features/cycles until the next frame_start_i.
 //   Steady state: each lane retires one vote per clock; with the references
 //     of a pixel spread over the banks, Lanes votes per clock.
@@ -99,12 +100,15 @@ module gbt_voter #(
   end
 `endif
 
-  typedef enum logic [2:0] {StIdle, StClear, StRun, StDrain, StMerge, StDone} state_e;
+  typedef enum logic [2:0] {StIdle, StClear, StRun, StDrain, StLaneMerge, StMerge, StDone} state_e;
   state_e state_q, state_d;
   logic end_pending_q;  // frame_end_i seen during StClear or StRun
 
   // ----------------------------------------------------------------- intake
   logic [Lanes-1:0] lane_idle, lane_room, lane_pushing;
+  /* verilator lint_off UNUSEDSIGNAL */
+  logic [Lanes-1:0] lane_merging;  // read by the formal proof only
+  /* verilator lint_on UNUSEDSIGNAL */
   logic [$clog2(FifoDepth):0] lane_free [Lanes];
   for (genvar k = 0; k < Lanes; k++) begin : g_room
     assign lane_room[k] = lane_free[k] >= 8;
@@ -222,6 +226,9 @@ module gbt_voter #(
   gbt_pkg::size_t       l_best_size [Lanes], l_runner_size [Lanes];
 
   wire clear = frame_start_i && (state_q == StIdle || state_q == StDone);
+  // Each lane merges its top-2 ring once the frame has drained (30 clocks).
+  logic lane_merge, lane_merge_sent_q;
+  assign lane_merge = state_q == StLaneMerge && !lane_merge_sent_q;
 
   for (genvar k = 0; k < Lanes; k++) begin : g_lane
     wire [RangeWidth-1:0] range = offsets_word_q[k*RangeWidth +: RangeWidth];
@@ -246,7 +253,7 @@ module gbt_voter #(
       .SizesInitFile(InitPrefix == "" ? "" : {InitPrefix, "sizes_", 8'(48 + k), ".mem"})
     ) u_lane (
       .clk_i, .rst_ni,
-      .clear_i(clear), .cell_count_i, .idle_o(lane_idle[k]),
+      .clear_i(clear), .merge_i(lane_merge), .cell_count_i, .idle_o(lane_idle[k]), .merging_o(lane_merging[k]),
       .range_push_i(push_q),
       .range_begin_i(range_q[RangeWidth-1:RangeCountWidth]),
       .range_count_i(range_q[RangeCountWidth-1:0]),
@@ -320,7 +327,8 @@ module gbt_voter #(
       StIdle, StDone: if (frame_start_i) state_d = StClear;
       StClear: if (&lane_idle) state_d = StRun;
       StRun: if (frame_end_i || end_pending_q) state_d = StDrain;
-      StDrain: if (!in_valid_q && !chk_valid_q && !pixel_valid_q && !word_valid_q && !pushing_q && !(|lane_pushing) && (&lane_idle)) state_d = (Lanes == 1) ? StDone : StMerge;
+      StDrain: if (!in_valid_q && !chk_valid_q && !pixel_valid_q && !word_valid_q && !pushing_q && !(|lane_pushing) && (&lane_idle)) state_d = StLaneMerge;
+      StLaneMerge: if (lane_merge_sent_q && (&lane_idle)) state_d = (Lanes == 1) ? StDone : StMerge;
       StMerge: if (Lanes == 1 || (merge_last && merge_advance)) state_d = StDone;  // constant for one lane: merge logic drops out
       default: state_d = StIdle;
     endcase
@@ -329,6 +337,7 @@ module gbt_voter #(
   always_ff @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       state_q <= StIdle;
+      lane_merge_sent_q <= 1'b0;
       end_pending_q <= 1'b0;
       cycles_q <= '0;
       merge_q <= '0;
@@ -343,6 +352,7 @@ module gbt_voter #(
       m_runner_size_q <= '0;
     end else begin
       state_q <= state_d;
+      lane_merge_sent_q <= state_q == StLaneMerge;
       if (clear || state_q == StDrain) end_pending_q <= 1'b0;
       else if (frame_end_i && (state_q == StClear || state_q == StRun)) end_pending_q <= 1'b1;
       if (clear) begin
@@ -384,7 +394,7 @@ module gbt_voter #(
     for (int k = 0; k < Lanes; k++) votes_sum += l_votes[k];
   end
 
-  assign busy_o = state_q == StClear || state_q == StDrain || state_q == StMerge;
+  assign busy_o = state_q == StClear || state_q == StDrain || state_q == StLaneMerge || state_q == StMerge;
   assign result_valid_o = state_q == StDone;
   assign best_cell_o = (Lanes == 1) ? l_best_cell[0] : m_best_cell_q;
   assign best_votes_o = (Lanes == 1) ? l_best_votes[0] : m_best_votes_q;
@@ -444,6 +454,10 @@ module gbt_voter #(
     if (rst_ni) begin
       if (state_q == StIdle || state_q == StDone || state_q == StMerge)
         assert ((&lane_idle) && !in_valid_q && !chk_valid_q && !pixel_valid_q && !word_valid_q && !pushing_q && !(|lane_pushing));
+      if (state_q != StLaneMerge) assert (!(|lane_merging));
+      if (state_q == StLaneMerge && !lane_merge_sent_q) assert (&lane_idle);
+      if (state_q == StLaneMerge)
+        assert (!in_valid_q && !chk_valid_q && !pixel_valid_q && !word_valid_q && !pushing_q && !(|lane_pushing));
       if (state_q == StClear)
         assert (!in_valid_q && !chk_valid_q && !pixel_valid_q && !word_valid_q && !pushing_q && !(|lane_pushing));
       for (int k = 0; k < Lanes; k++) begin

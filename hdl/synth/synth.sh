@@ -6,7 +6,9 @@
 # for the UP5K (sg48) with a 48 MHz target. Writes OUTDIR/report.md with LUTs,
 # memory blocks, DSPs, Fmax and votes per second (lanes x Fmax).
 # EXPORT_ARGS (optional): more `tables export-hdl` options, e.g. "--range-count 3"
-# for narrow offsets words.
+# for narrow offsets words. SEEDS (default "1 2 3 4 5"): nextpnr placement
+# seeds; the report gives the best build's Fmax and the range over the seeds
+# (placement alone moves Fmax by about 10% on this design).
 set -euo pipefail
 table=${1:?usage: synth.sh TABLE.gbt OUTDIR [LANES...]}
 out=${2:?usage: synth.sh TABLE.gbt OUTDIR [LANES...]}
@@ -28,8 +30,8 @@ print(f"Table: `{sys.argv[2]}`: {d['cells']} cells, ROI {d['roi']['width']}x{d['
 PY
   echo "Target: iCE40 UP5K (5280 LUT4, 30 EBR of 4 kbit, 4 SPRAM of 256 kbit, 8 DSP), table loaded at boot through the table port (SPRAM cannot be preloaded)."
   echo
-  echo "| lanes | LUT4 | carry | DFF | EBR | SPRAM | DSP | generic (coarse) cells | fits UP5K | Fmax (MHz) | votes/s |"
-  echo "|---:|---:|---:|---:|---:|---:|---:|---:|---|---:|---:|"
+  echo "| lanes | LUT4 | carry | DFF | EBR | SPRAM | DSP | generic (coarse) cells | fits UP5K | Fmax (MHz), best seed | Fmax over seeds | votes/s |"
+  echo "|---:|---:|---:|---:|---:|---:|---:|---:|---|---:|---|---:|"
 } > "$report"
 for lanes in $lanes_list; do
   d=$out/lanes$lanes
@@ -45,20 +47,30 @@ for lanes in $lanes_list; do
   lut=$(count SB_LUT4); carry=$(count SB_CARRY); ebr=$(count SB_RAM40_4K); spram=$(count SB_SPRAM256KA); dsp=$(count SB_MAC16)
   dff=$(grep -E "^\s+SB_DFF" "$d/ice40_stat.txt" | awk '{s+=$2} END {print s+0}')
   generic=$(grep -E "Number of cells:" "$d/generic_stat.txt" | tail -1 | awk '{print $4}')
-  fits=yes fmax=- vps=-
-  if nextpnr-ice40 --up5k --package sg48 --json "$d/voter.json" --freq 48 --seed 1 --timing-allow-fail \
-       --report "$d/nextpnr.json" >"$d/nextpnr.log" 2>&1; then
-    fmax=$(python3 - "$d/nextpnr.json" <<'PY'
+  fits=yes fmax=- vps=- spread=-
+  best_seed=
+  for seed in ${SEEDS:-1 2 3 4 5}; do
+    if nextpnr-ice40 --up5k --package sg48 --json "$d/voter.json" --freq 48 --seed "$seed" --timing-allow-fail \
+         --report "$d/nextpnr-$seed.json" >"$d/nextpnr-$seed.log" 2>&1; then
+      python3 - "$d/nextpnr-$seed.json" > "$d/fmax-$seed.txt" <<'PY'
 import json, sys
 r = json.load(open(sys.argv[1]))
 print(f"{min(v['achieved'] for v in r['fmax'].values()):.1f}")
 PY
-)
+      f=$(cat "$d/fmax-$seed.txt")
+      if [ -z "$best_seed" ] || python3 -c "import sys; sys.exit(0 if $f > $fmax else 1)"; then fmax=$f; best_seed=$seed; fi
+    else
+      fits="no ($(grep -m1 -E 'ERROR' "$d/nextpnr-$seed.log" | cut -c1-80))"
+      break
+    fi
+  done
+  if [ -n "$best_seed" ] && [ "$fits" = yes ]; then
+    cp "$d/nextpnr-$best_seed.log" "$d/nextpnr.log"
+    spread="$(sort -n "$d"/fmax-*.txt | head -1)-$(sort -n "$d"/fmax-*.txt | tail -1) (seeds ${SEEDS:-1 2 3 4 5})"
     vps=$(python3 -c "print(f'{$lanes * $fmax * 1e6:.3g}')")
-  else
-    fits="no ($(grep -m1 -E 'ERROR' "$d/nextpnr.log" | cut -c1-80))"
+    fmax="$fmax (seed $best_seed)"
   fi
-  echo "| $lanes | ${lut:-0} | ${carry:-0} | ${dff:-0} | ${ebr:-0} | ${spram:-0} | ${dsp:-0} | ${generic:-?} | $fits | $fmax | $vps |" >> "$report"
+  echo "| $lanes | ${lut:-0} | ${carry:-0} | ${dff:-0} | ${ebr:-0} | ${spram:-0} | ${dsp:-0} | ${generic:-?} | $fits | $fmax | $spread | $vps |" >> "$report"
   echo "lanes $lanes: LUT ${lut:-0}, EBR ${ebr:-0}, SPRAM ${spram:-0}, DSP ${dsp:-0}, Fmax $fmax MHz" >&2
 done
 echo >> "$report"
