@@ -1,9 +1,39 @@
 #include "gabarit/tracking_session.hpp"
 
+#include <array>
+
 #include "gabarit/refinement.hpp"
 
 namespace gabarit {
 namespace {
+
+// The recovery grid: 7 x 7 placements at three turns, nearest rings first
+// (ring = max(|i|, |j|)), turn 0 before the others within a ring. The first
+// kSearchNear (ring <= 1 at turn 0) are voted in every lost frame.
+struct SearchPlacement {
+  std::int8_t i = 0, j = 0;
+  std::uint8_t turn = 0;
+};
+constexpr std::uint32_t kSearchNear = 9;
+constexpr std::array<SearchPlacement, 147> make_search_placements() {
+  std::array<SearchPlacement, 147> out{};
+  std::size_t n = 0;
+  const auto ring_of = [](int i, int j) { return (i < 0 ? -i : i) > (j < 0 ? -j : j) ? (i < 0 ? -i : i) : (j < 0 ? -j : j); };
+  for (int pass = 0; pass < 2; ++pass)
+    for (int ring = 0; ring <= 3; ++ring)
+      for (int turn = 0; turn < 3; ++turn)
+        for (int j = -ring; j <= ring; ++j)
+          for (int i = -ring; i <= ring; ++i) {
+            const bool near = turn == 0 && ring <= 1;
+            if (ring_of(i, j) == ring && near == (pass == 0))
+              out[n++] = {static_cast<std::int8_t>(i), static_cast<std::int8_t>(j), static_cast<std::uint8_t>(turn)};
+          }
+  return out;
+}
+constexpr std::array<SearchPlacement, 147> kSearchPlacements = make_search_placements();
+static_assert(kSearchPlacements[0].i == 0 && kSearchPlacements[0].j == 0 && kSearchPlacements[8].turn == 0 &&
+                  kSearchPlacements[9].i == 0 && kSearchPlacements[9].turn == 1 && kSearchPlacements[146].turn == 2,
+              "the 9 near placements (turn 0, ring <= 1) first, then ring 0 turned, ring by ring");
 
 bool finite_pose(const Pose& p) noexcept {
   const auto ok = [](float v) { return v == v && v > -1.0e6f && v < 1.0e6f; };
@@ -21,6 +51,7 @@ Status TrackingSession::start(const SessionOptions& options, const Pose& initial
   pose_ = last_confident_ = initial;
   motion_ = confident_motion_ = {};
   frames_since_confident_ = 0;
+  search_cursor_ = 0;
   reference_ = 0.0f;
   lost_ = false;
   return Status::kOk;
@@ -42,6 +73,10 @@ Status TrackingSession::step(const ImageView& image, SessionScratch scratch, Ses
   out = SessionResult{};
   ++frames_since_confident_;
   GABARIT_TRY(lost_ ? search(image, scratch, out) : track_fine(image, scratch, out));
+  if (stack_ != nullptr && out.state != TrackState::kLost) {
+    GABARIT_TRY(depth_by_intensity(image, pose_, *stack_, pose_.depth));
+    out.pose = pose_;
+  }
   if (out.confidence == Confidence::kHigh) {
     last_confident_ = pose_;
     confident_motion_ = motion_;
@@ -169,30 +204,34 @@ Status TrackingSession::search(const ImageView& image, SessionScratch scratch, S
     constexpr int kShortlist = 3;
     Pose shortlist[kShortlist];
     float shortlist_score[kShortlist] = {-1.0f, -1.0f, -1.0f};
-    for (const float turn : turns) {
-      for (int j = -3; j <= 3; ++j) {
-        for (int i = -3; i <= 3; ++i) {
-          Pose p = centre;
-          p.x += static_cast<float>(i) * sx;
-          p.y += static_cast<float>(j) * sy;
-          p.theta_deg += turn;
-          StepResult trial;
-          GABARIT_TRY(track_step(fine_, detector_, image, p, scratch.fine, trial));
-          if (trial.best.votes == 0) continue;
-          for (int k = 0; k < kShortlist; ++k) {
-            if (trial.score > shortlist_score[k]) {
-              for (int m = kShortlist - 1; m > k; --m) {
-                shortlist[m] = shortlist[m - 1];
-                shortlist_score[m] = shortlist_score[m - 1];
-              }
-              shortlist[k] = trial.pose;
-              shortlist_score[k] = trial.score;
-              break;
-            }
+    const auto place = [&](const SearchPlacement& at) -> Status {
+      Pose p = centre;
+      p.x += static_cast<float>(at.i) * sx;
+      p.y += static_cast<float>(at.j) * sy;
+      p.theta_deg += turns[at.turn];
+      StepResult trial;
+      GABARIT_TRY(track_step(fine_, detector_, image, p, scratch.fine, trial));
+      if (trial.best.votes == 0) return Status::kOk;
+      for (int k = 0; k < kShortlist; ++k) {
+        if (trial.score > shortlist_score[k]) {
+          for (int m = kShortlist - 1; m > k; --m) {
+            shortlist[m] = shortlist[m - 1];
+            shortlist_score[m] = shortlist_score[m - 1];
           }
+          shortlist[k] = trial.pose;
+          shortlist_score[k] = trial.score;
+          break;
         }
       }
+      return Status::kOk;
+    };
+    constexpr std::uint32_t kOuter = kSearchPlacements.size() - kSearchNear;
+    for (std::uint32_t k = 0; k < kSearchNear; ++k) GABARIT_TRY(place(kSearchPlacements[k]));
+    const std::uint32_t budget = options_.search_budget == 0 || options_.search_budget > kOuter ? kOuter : options_.search_budget;
+    for (std::uint32_t k = 0; k < budget; ++k) {
+      GABARIT_TRY(place(kSearchPlacements[kSearchNear + (search_cursor_ + k) % kOuter]));
     }
+    search_cursor_ = (search_cursor_ + budget) % kOuter;
     float best = -1.0f;
     for (int k = 0; k < kShortlist && shortlist_score[k] >= 0.0f; ++k) {
       StepResult again;

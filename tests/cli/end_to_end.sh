@@ -99,6 +99,15 @@ $g track --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init" --motion-fil
 $g eval --gt "$s/gt.csv" --poses "$s/p.csv" > "$s/acc.json" || fail "eval on the scene"
 grep -q '"frames": 34' "$s/acc.json" || fail "scene: 34 visible frames expected: $(cat "$s/acc.json")"
 grep -q '"reacquired_after_frames": \[[0-9]' "$s/acc.json" || fail "scene: not reacquired after the occlusion: $(cat "$s/acc.json")"
+# Depth by intensity: the scene's two depths, every visible frame's depth exact.
+$g track --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init" --motion-filter --refine --recover \
+  --focus-stack "$s/model_00.pgm,$s/model_01.pgm" -o "$s/pf.csv" 2>/dev/null || fail "track --focus-stack"
+$g eval --gt "$s/gt.csv" --poses "$s/pf.csv" > "$s/accf.json" || fail "eval with --focus-stack"
+grep -q '"depth_exact": 34' "$s/accf.json" || fail "--focus-stack: every visible depth expected exact: $(cat "$s/accf.json")"
+expect 1 "the focus stack has 1 images; the table has 2 depths" $g track --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init" \
+  --motion-filter --focus-stack "$s/model_00.pgm"
+expect 2 "drop --threads" $g track --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init" --threads 2 \
+  --focus-stack "$s/model_00.pgm,$s/model_01.pgm"
 expect 2 "applies to --scene" $g synth --shape curve --depths 3 -o "$work/x"
 expect 2 "one of --shape and --scene" $g synth -o "$work/x"
 expect 2 "--translations" $g tables build --model "$s/model_00.pgm" --x 0:0:1 --y 0:0:1 --translations middle -o "$work/x.gbt"

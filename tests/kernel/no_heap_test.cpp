@@ -15,6 +15,7 @@
 #include "gabarit/features.hpp"
 #include "gabarit/host/image_io.hpp"
 #include "gabarit/tracker.hpp"
+#include "gabarit/depth_by_intensity.hpp"
 #include "gabarit/tracking_session.hpp"
 #include "gabarit/voter.hpp"
 #include "test_tables.hpp"
@@ -151,6 +152,19 @@ int main() {
     for (int i = 0; i < 12 && ok; ++i) ok = session.step(blank.view(), {scratch, {}}, r) == Status::kOk;
     return ok && session.lost();
   });
-  std::printf("%d passed, %d failed\n", 10 - failures, failures);
+  // Depth by intensity, inside a session and on its own.
+  const ImageView stack_views[2] = {view, view};
+  const FocusStack stack{std::span<const ImageView>(stack_views, 2), 16.0f, 16.0f, 2};
+  expect_no_allocation("depth by intensity", [&] {
+    std::uint16_t depth = 0;
+    return depth_by_intensity(view, Pose{32, 32, 5.0f, 0}, stack, depth) == Status::kOk;
+  });
+  expect_no_allocation("tracking session with a focus stack", [&] {
+    TrackingSession with_stack(table, nullptr, detector_of(table));
+    with_stack.use_focus_stack(&stack);
+    SessionResult r;
+    return with_stack.start(SessionOptions{}, Pose{32, 32, 0, 0}) == Status::kOk && with_stack.step(view, {scratch, {}}, r) == Status::kOk;
+  });
+  std::printf("%d passed, %d failed\n", 12 - failures, failures);
   return failures == 0 ? 0 : 1;
 }

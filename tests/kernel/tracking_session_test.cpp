@@ -109,14 +109,20 @@ TEST(TrackingSession, PlainSessionIsTrackStepFrameForFrame) {
   }
 }
 
+// The full recovery grid every lost frame (search_budget 0), and the grid
+// spread over lost frames (24 outer placements a frame).
 TEST(TrackingSession, TheMotionFilterFollowsSmoothMotionAndRecoversAfterAnOcclusion) {
+  for (const std::uint32_t budget : {0u, 24u}) {
+  SCOPED_TRACE(budget);
   host::Rng rng(12);
   const auto pts = testing::random_points(rng, 80, 14);
   const auto bytes = build(point_model(pts), "-4:4:9", "-4:4:9");
   const TableView t = testing::open_table(bytes);
   Scratch s(t);
   TrackingSession session(t, nullptr, detector_of(t));
-  ASSERT_EQ(session.start(SessionOptions{}, Pose{40, 60, 0, 0}), Status::kOk);
+  SessionOptions options;
+  options.search_budget = budget;
+  ASSERT_EQ(session.start(options, Pose{40, 60, 0, 0}), Status::kOk);
   // 2 px per frame to the right; hidden for 15 frames, by when it is 30 px
   // from where it was last seen, far beyond the table's +-4 px.
   int reacquired_at = -1, lost_frames = 0;
@@ -144,6 +150,7 @@ TEST(TrackingSession, TheMotionFilterFollowsSmoothMotionAndRecoversAfterAnOcclus
   EXPECT_GT(lost_frames, 0) << "an empty frame sequence must end in the lost state";
   EXPECT_GE(reacquired_at, 30);
   EXPECT_LE(reacquired_at, 32) << "recovery took too long";
+  }
 }
 
 TEST(TrackingSession, BadOptionsAreRefused) {

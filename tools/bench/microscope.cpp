@@ -184,9 +184,11 @@ int run_microscope(const std::string& dir, bool quick) {
   const Pose init{static_cast<float>(truth[0].x), static_cast<float>(truth[0].y), static_cast<float>(truth[0].theta_deg),
                   static_cast<std::uint16_t>(truth[0].depth)};
   std::vector<Run> runs;
-  const auto track = [&](const std::string& name, const SessionOptions& session, const TableView& with) {
+  const auto track = [&](const std::string& name, const SessionOptions& session, const TableView& with,
+                         bool focus_stack = false) {
     host::TrackingOptions options;
     options.session = session;
+    if (focus_stack) options.focus_stack = model_images;
     Run r{name, {}, 0, {}};
     MemoryFrames src(frames);
     double total = 0;
@@ -210,6 +212,12 @@ int run_microscope(const std::string& dir, bool quick) {
   TableView canny_table;
   if (TableView::open(canny_bytes, canny_table) != Status::kOk) throw host::Error("microscope: Canny table invalid");
   track("the same, Canny variant detector", SessionOptions{}, canny_table);
+  // Depth by intensity at the tracked pose (depth_by_intensity.hpp), and the
+  // recovery search spread over lost frames (SessionOptions::search_budget).
+  track("filter + refinement + recovery + depth by intensity", SessionOptions{}, table, true);
+  SessionOptions budgeted;
+  budgeted.search_budget = 24;
+  track("the same + search budget of 24 placements per lost frame", budgeted, table, true);
   {
     NccBank ncc(model_images, 4, 0.5, 3);
     Run r{"OpenCV NCC bank (TM_CCOEFF_NORMED, same 4-DOF window)", {}, 0, {}};

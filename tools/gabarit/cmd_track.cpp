@@ -28,7 +28,12 @@ int track(const std::vector<std::string>& argv) {
              {"--refine", "", "sub-cell x, y, theta from a parabola through the neighbouring cells' scores"},
              {"--recover", "", "once lost, search around the last confident pose until a confident hit"},
              {"--coarse", "T", "table for the recovery search (larger cells, wider window; implies --recover)"},
+             {"--search-budget", "N", "recovery grid placements per lost frame beyond the nearest 9, 1..138\n"
+                                     "(default: all 138; fewer costs less per lost frame and covers the grid over\n"
+                                     "several frames)"},
              {"--threads", "N", "vote each frame on N threads (plain loop only; same output), 1..64 (default 1)"},
+             {"--focus-stack", "A.pgm,B.pgm,...", "the table's model images, one per depth: choose each frame's depth by\n"
+                                                  "intensity (normalised cross-correlation) at the tracked pose"},
              {"-o", "POSES.csv", "pose output (default stdout)"},
              {"--stats", "STATS.json", "per-frame timing and vote statistics"}});
   if (!args.parse(argv)) return 0;
@@ -45,9 +50,21 @@ int track(const std::vector<std::string>& argv) {
   options.session.motion_filter = args.has("--motion-filter");
   options.session.refine = args.has("--refine");
   options.session.recover = args.has("--recover") || args.has("--coarse");
+  options.session.search_budget = static_cast<std::uint32_t>(args.integer("--search-budget", 0, 1, 138));
   options.threads = static_cast<unsigned>(args.integer("--threads", 1, 1, 64));
   if (options.threads > 1 && (options.session.motion_filter || options.session.refine || options.session.recover))
     throw UsageError("--threads applies to the plain loop, without --motion-filter, --refine, --recover or --coarse");
+  if (args.has("--focus-stack")) {
+    if (options.threads > 1) throw UsageError("--focus-stack needs the session loop; drop --threads");
+    std::string list = args.get("--focus-stack");
+    for (std::size_t start = 0; start <= list.size();) {
+      const std::size_t comma = std::min(list.find(',', start), list.size());
+      const std::string path = list.substr(start, comma - start);
+      if (path.empty()) throw UsageError("--focus-stack: an empty image path");
+      options.focus_stack.push_back(host::read_pgm(path));
+      start = comma + 1;
+    }
+  }
   if (options.threads > 1 && args.has("--voter")) throw UsageError("--threads votes with its own (multi-threaded CSR) voter; drop --voter");
   std::optional<host::MappedFile> coarse_file;
   TableView coarse;

@@ -13,9 +13,12 @@
 //     places (7 x 7 ROI positions spaced by the table's x/y extent, at the
 //     angle offsets 0 and +-search_turn_deg), and the three best placements
 //     are voted again from their own estimates (the target, centred, scores
-//     far above clutter): 150 fine votes in a lost frame, the best of which
-//     must reach high confidence. (Searching one angle offset per lost frame
-//     costs a third but reacquired 4 frames later on the microscope scene.)
+//     far above clutter); the best must reach high confidence. A lost frame
+//     votes the 9 placements nearest the centre (no turn) and the next
+//     search_budget of the other 138 in turn, nearest rings first, so a
+//     lost frame costs about search_budget + 13 fine votes and the whole
+//     grid is covered every ceil(138 / search_budget) lost frames
+//     (search_budget 0: all 147 every frame).
 // With everything off (kPlainSession) a session is exactly track_step frame
 // after frame, a lost frame keeping the previous pose.
 // No heap: scratch comes from the caller, as for track_step.
@@ -24,6 +27,7 @@
 #include <cstdint>
 #include <span>
 
+#include "gabarit/depth_by_intensity.hpp"
 #include "gabarit/motion_filter.hpp"
 #include "gabarit/tracker.hpp"
 
@@ -34,10 +38,11 @@ struct SessionOptions {
   bool refine = true;
   bool recover = true;  // search for the target once lost (else keep predicting)
   float search_turn_deg = 3.0f;  // the grid search's angle offsets
+  std::uint32_t search_budget = 0;  // grid placements beyond the nearest 9 per lost frame; 0 = all 138
   MotionFilterParams filter;
 };
 // track_step frame after frame, nothing added: the thesis's tracker.
-inline constexpr SessionOptions kPlainSession{false, false, false, 3.0f, {}};
+inline constexpr SessionOptions kPlainSession{false, false, false, 3.0f, 0, {}};
 
 struct SessionScratch {
   TrackerScratch fine;
@@ -62,6 +67,10 @@ class TrackingSession {
       : fine_(fine), coarse_(coarse), detector_(detector) {}
   [[nodiscard]] Status start(const SessionOptions& options, const Pose& initial) noexcept;
   [[nodiscard]] Status step(const ImageView& image, SessionScratch scratch, SessionResult& out) noexcept;
+  // With a focus stack (which must outlive the session; nullptr to stop),
+  // each frame's depth is then chosen by intensity at the tracked pose
+  // (depth_by_intensity.hpp) instead of by the winning stencils' stack index.
+  void use_focus_stack(const FocusStack* stack) noexcept { stack_ = stack; }
 
   const Pose& pose() const noexcept { return pose_; }
   float reference_score() const noexcept { return reference_; }
@@ -84,6 +93,8 @@ class TrackingSession {
   MotionFilterState motion_;
   float reference_ = 0.0f;  // running score of high-confidence frames (motion_filter.hpp)
   bool lost_ = false;
+  const FocusStack* stack_ = nullptr;
+  std::uint32_t search_cursor_ = 0;  // the next of the outer placements to vote
 };
 
 }  // namespace gabarit

@@ -86,8 +86,8 @@ void run_tracking(const TableView& table, FrameSource& frames, const Pose& init,
                   const std::function<void(const TrackRow&)>& on_row) {
   if (options.threads > 1) {
     const SessionOptions& s = options.session;
-    if (s.motion_filter || s.refine || s.recover || options.coarse != nullptr)
-      throw Error("voting on several threads applies to the plain loop (no motion filter, refinement or recovery)");
+    if (s.motion_filter || s.refine || s.recover || options.coarse != nullptr || !options.focus_stack.empty())
+      throw Error("voting on several threads applies to the plain loop (no motion filter, refinement, recovery or focus stack)");
     run_plain_parallel(table, frames, init, options, on_row);
     return;
   }
@@ -101,6 +101,22 @@ void run_tracking(const TableView& table, FrameSource& frames, const Pose& init,
   TrackingSession session(table, options.coarse, options.detector ? *options.detector : detector_of(table));
   if (const Status s = session.start(options.session, init); s != Status::kOk) {
     throw Error(std::string("tracking options or initial pose rejected: ") + status_name(s));
+  }
+  std::vector<ImageView> stack_views;
+  FocusStack stack;
+  if (!options.focus_stack.empty()) {
+    if (options.focus_stack.size() != table.depth_count()) {
+      throw Error("the focus stack has " + std::to_string(options.focus_stack.size()) + " images; the table has " +
+                  std::to_string(table.depth_count()) + " depths");
+    }
+    for (const GrayImage& image : options.focus_stack) {
+      if (image.width != options.focus_stack[0].width || image.height != options.focus_stack[0].height) {
+        throw Error("the focus stack's images differ in size");
+      }
+      stack_views.push_back(image.view());
+    }
+    stack = FocusStack{stack_views, table.model_ref_x(), table.model_ref_y(), 2};
+    session.use_focus_stack(&stack);
   }
   GrayImage frame;
   TrackRow row;

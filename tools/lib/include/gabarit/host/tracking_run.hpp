@@ -58,6 +58,10 @@ struct TrackingOptions {
   // only for the plain loop (kPlainSession, no coarse table); the rows are
   // the same bytes as with one thread.
   unsigned threads = 1;
+  // The focus stack's images (one per depth, the table's model images): when
+  // given, each frame's depth is chosen by intensity at the tracked pose
+  // (depth_by_intensity.hpp). Only with a session (not the --threads loop).
+  std::vector<GrayImage> focus_stack;
 };
 
 // Calls on_row for every frame. row.step is the frame's vote with the

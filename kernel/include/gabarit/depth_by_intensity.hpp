@@ -1,0 +1,33 @@
+// The focus-stack depth from intensities, at a tracked pose.
+//
+// Edge features change little when an object goes out of focus, so the
+// stencils tell neighbouring stack depths apart poorly (docs/tracking.md).
+// Intensities do: at the pose the votes found, each stack image is laid over
+// the frame (rotated by the pose's angle about the model's reference point)
+// and compared by normalised cross-correlation; the best-correlated image is
+// the depth. Integer sums, so every target gets the same answer; every
+// `step`-th model pixel in each direction is sampled.
+#pragma once
+#include <cstdint>
+#include <span>
+
+#include "gabarit/image_view.hpp"
+#include "gabarit/status.hpp"
+#include "gabarit/tracker.hpp"
+
+namespace gabarit {
+
+struct FocusStack {
+  std::span<const ImageView> images;  // one per depth, all the same size, in depth order
+  float ref_x = 0.0f, ref_y = 0.0f;   // the model's reference point in those images
+  std::uint32_t step = 2;             // sample every step-th pixel (>= 1)
+};
+
+// kInvalidArgument for an empty stack, invalid images or images of different
+// sizes, a zero step, more than 65535 depths, or a non-finite pose; `depth` is
+// then left unchanged. When fewer than 16 samples fall inside the frame (the
+// object is leaving it) there is nothing to compare: kOk, `depth` unchanged.
+[[nodiscard]] Status depth_by_intensity(const ImageView& frame, const Pose& pose, const FocusStack& stack,
+                                        std::uint16_t& depth) noexcept;
+
+}  // namespace gabarit
