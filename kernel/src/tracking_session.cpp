@@ -76,6 +76,10 @@ Status TrackingSession::step(const ImageView& image, SessionScratch scratch, Ses
   if (stack_ != nullptr && out.state != TrackState::kLost) {
     GABARIT_TRY(depth_by_intensity(image, pose_, *stack_, pose_.depth));
     out.pose = pose_;
+    // The finer angle is reported, not fed back: the votes keep tracking from
+    // their own estimate (fed back, it moved the next frames' ROI and cost
+    // more than it gained on the microscope scene).
+    GABARIT_TRY(angle_by_intensity(image, pose_, *stack_, out.pose.theta_deg));
   }
   if (out.confidence == Confidence::kHigh) {
     last_confident_ = pose_;

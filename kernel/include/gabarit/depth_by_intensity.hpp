@@ -1,4 +1,4 @@
-// The focus-stack depth from intensities, at a tracked pose.
+// The focus-stack depth (and a finer angle) from intensities, at a tracked pose.
 //
 // Edge features change little when an object goes out of focus, so the
 // stencils tell neighbouring stack depths apart poorly (docs/tracking.md).
@@ -29,5 +29,16 @@ struct FocusStack {
 // object is leaving it) there is nothing to compare: kOk, `depth` unchanged.
 [[nodiscard]] Status depth_by_intensity(const ImageView& frame, const Pose& pose, const FocusStack& stack,
                                         std::uint16_t& depth) noexcept;
+
+// The angle by intensity: the stack image of pose.depth correlated with the
+// frame at the pose's angle plus -1.5 .. +1.5 degrees in 0.25-degree steps;
+// `theta_deg` is the best, placed between steps by a parabola through the
+// peak. Stencil cells are 0.5 degrees or more wide; the intensities pin the
+// angle down further. kInvalidArgument as above or for a depth outside the
+// stack; kOk with `theta_deg` unchanged when the object is leaving the frame.
+inline constexpr int kAngleSteps = 6;
+inline constexpr float kAngleIncrementDeg = 0.25f;
+[[nodiscard]] Status angle_by_intensity(const ImageView& frame, const Pose& pose, const FocusStack& stack,
+                                        float& theta_deg) noexcept;
 
 }  // namespace gabarit
