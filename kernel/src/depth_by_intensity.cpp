@@ -1,54 +1,97 @@
 #include "gabarit/depth_by_intensity.hpp"
 
+#include <cstddef>
+
 #include "gabarit/deterministic_math.hpp"
 
 namespace gabarit {
 namespace {
 
+// x * 65536 rounded, halves away from zero (|x| < 2^46).
+std::int64_t round_fixed(double x) noexcept {
+  const double scaled = x * 65536.0;
+  return static_cast<std::int64_t>(scaled >= 0.0 ? scaled + 0.5 : scaled - 0.5);
+}
+
 bool finite(float v) noexcept { return v == v && v - v == 0.0f; }  // not NaN, not infinite
 
-// Sums of one stack image against the frame: exact integers (n <= 2^32 samples
-// of 8-bit values), so the correlation is the same on every target.
-struct Sums {
-  std::uint64_t n = 0, a = 0, b = 0, aa = 0, bb = 0, ab = 0;
+// Stack images correlated in one pass over the frame: the frame samples (and
+// their sums) are shared, each image adds its own. Up to kGroup at a time,
+// so the sums live on the stack.
+constexpr std::size_t kGroup = 8;
+
+// Sums of stack images against the frame: exact integers (8-bit model values,
+// frame values in 1/256 units up to 255 * 256; exact for fewer than 2^32
+// samples), so the correlation is the same on every target.
+struct FrameSums {
+  std::uint64_t n = 0, b = 0, bb = 0;
+};
+struct ImageSums {
+  std::uint64_t a = 0, aa = 0, ab = 0;
 };
 
-// The correlation of one stack image with the frame at a pose, as the sign of
-// the correlation times its square (ordered like the correlation, no square
-// root). false when too few samples fall in the frame or either side is flat.
-bool correlation(const ImageView& frame, const ImageView& m, const Pose& pose, const FocusStack& stack,
-                 double& score) noexcept {
+// The correlation of each of `images` (at most kGroup, all of the stack's
+// size) with the frame at a pose, as the sign of the correlation times its
+// square (ordered like the correlation, no square root); ok[i] is false when
+// too few samples fall in the frame or either side is flat.
+void correlations(const ImageView& frame, std::span<const ImageView> images, const Pose& pose, const FocusStack& stack,
+                  double* scores, bool* ok) noexcept {
   const SinCos r = sin_cos_deg(pose.theta_deg);
-  Sums s;
-  for (std::uint32_t v = 0; v < m.height; v += stack.step) {
-    const float dv = static_cast<float>(v) - stack.ref_y;
-    for (std::uint32_t u = 0; u < m.width; u += stack.step) {
-      const float du = static_cast<float>(u) - stack.ref_x;
-      const std::int32_t fx = round_to_int(pose.x + r.cos * du - r.sin * dv);
-      const std::int32_t fy = round_to_int(pose.y + r.sin * du + r.cos * dv);
-      if (fx < 0 || fy < 0 || static_cast<std::uint32_t>(fx) >= frame.width || static_cast<std::uint32_t>(fy) >= frame.height) {
-        continue;
+  const ImageView& shape = images[0];
+  FrameSums f;
+  ImageSums s[kGroup];
+  // Sample positions in 1/65536-pixel fixed point: each row's first from the
+  // pose (in double, the same IEEE operations on every target), the rest by
+  // adding the rotated step, so the inner loop is integer only.
+  const double c = static_cast<double>(r.cos), sn = static_cast<double>(r.sin);
+  const double step = static_cast<double>(stack.step);
+  const std::int64_t step_x = round_fixed(c * step), step_y = round_fixed(sn * step);
+  const double du0 = -static_cast<double>(stack.ref_x);
+  for (std::uint32_t v = 0; v < shape.height; v += stack.step) {
+    const double dv = static_cast<double>(v) - static_cast<double>(stack.ref_y);
+    std::int64_t px = round_fixed(static_cast<double>(pose.x) + c * du0 - sn * dv);
+    std::int64_t py = round_fixed(static_cast<double>(pose.y) + sn * du0 + c * dv);
+    for (std::uint32_t u = 0; u < shape.width; u += stack.step, px += step_x, py += step_y) {
+      // The frame sampled bilinearly (weights in 1/256): the correlation then
+      // varies smoothly with the angle, which the angle's parabola relies on.
+      if (px < 0 || py < 0) continue;
+      const auto ix = static_cast<std::uint64_t>(px) >> 16, iy = static_cast<std::uint64_t>(py) >> 16;
+      if (ix + 1 >= frame.width || iy + 1 >= frame.height) continue;
+      const auto fx = static_cast<std::uint32_t>(px >> 8), fy = static_cast<std::uint32_t>(py >> 8);
+      const std::uint32_t wx = fx & 255u, wy = fy & 255u;
+      const std::uint8_t* row0 = frame.pixels + static_cast<std::size_t>(iy) * frame.stride + static_cast<std::size_t>(ix);
+      const std::uint8_t* row1 = row0 + frame.stride;
+      const std::uint32_t top = row0[0] * (256u - wx) + row0[1] * wx;
+      const std::uint32_t bottom = row1[0] * (256u - wx) + row1[1] * wx;
+      const std::uint64_t b = (top * (256u - wy) + bottom * wy + 128u) >> 8;  // 0 .. 255 * 256
+      ++f.n;
+      f.b += b;
+      f.bb += b * b;
+      for (std::size_t i = 0; i < images.size(); ++i) {
+        const std::uint64_t a = images[i].at(u, v);
+        s[i].a += a;
+        s[i].aa += a * a;
+        s[i].ab += a * b;
       }
-      const std::uint64_t a = m.at(u, v);
-      const std::uint64_t b = frame.at(static_cast<std::uint32_t>(fx), static_cast<std::uint32_t>(fy));
-      ++s.n;
-      s.a += a;
-      s.b += b;
-      s.aa += a * a;
-      s.bb += b * b;
-      s.ab += a * b;
     }
   }
-  if (s.n < 16) return false;
   // n^2 times the covariance and the variances. The sums are exact; the
   // products are taken in double, the same IEEE operations on every target.
-  const double n = static_cast<double>(s.n);
-  const double cov = n * static_cast<double>(s.ab) - static_cast<double>(s.a) * static_cast<double>(s.b);
-  const double va = n * static_cast<double>(s.aa) - static_cast<double>(s.a) * static_cast<double>(s.a);
-  const double vb = n * static_cast<double>(s.bb) - static_cast<double>(s.b) * static_cast<double>(s.b);
-  if (va <= 0.0 || vb <= 0.0) return false;
-  score = (cov >= 0.0 ? cov * cov : -cov * cov) / (va * vb);
-  return true;
+  const double n = static_cast<double>(f.n);
+  const double vb = n * static_cast<double>(f.bb) - static_cast<double>(f.b) * static_cast<double>(f.b);
+  for (std::size_t i = 0; i < images.size(); ++i) {
+    const double cov = n * static_cast<double>(s[i].ab) - static_cast<double>(s[i].a) * static_cast<double>(f.b);
+    const double va = n * static_cast<double>(s[i].aa) - static_cast<double>(s[i].a) * static_cast<double>(s[i].a);
+    ok[i] = f.n >= 16 && va > 0.0 && vb > 0.0;
+    scores[i] = ok[i] ? (cov >= 0.0 ? cov * cov : -cov * cov) / (va * vb) : 0.0;
+  }
+}
+
+bool correlation(const ImageView& frame, const ImageView& m, const Pose& pose, const FocusStack& stack,
+                 double& score) noexcept {
+  bool ok = false;
+  correlations(frame, std::span<const ImageView>(&m, 1), pose, stack, &score, &ok);
+  return ok;
 }
 
 bool valid_inputs(const ImageView& frame, const Pose& pose, const FocusStack& stack) noexcept {
@@ -72,13 +115,18 @@ Status depth_by_intensity(const ImageView& frame, const Pose& pose, const FocusS
   bool have_best = false;
   double best_score = 0.0;
   std::uint16_t best_depth = depth;
-  for (std::size_t d = 0; d < stack.images.size(); ++d) {
-    double score = 0.0;
-    if (!correlation(frame, stack.images[d], pose, stack, score)) continue;
-    if (!have_best || score > best_score) {
-      have_best = true;
-      best_score = score;
-      best_depth = static_cast<std::uint16_t>(d);
+  for (std::size_t first = 0; first < stack.images.size(); first += kGroup) {
+    const std::span<const ImageView> group =
+        stack.images.subspan(first, stack.images.size() - first < kGroup ? stack.images.size() - first : kGroup);
+    double scores[kGroup];
+    bool ok[kGroup];
+    correlations(frame, group, pose, stack, scores, ok);
+    for (std::size_t i = 0; i < group.size(); ++i) {
+      if (ok[i] && (!have_best || scores[i] > best_score)) {
+        have_best = true;
+        best_score = scores[i];
+        best_depth = static_cast<std::uint16_t>(first + i);
+      }
     }
   }
   if (have_best) depth = best_depth;

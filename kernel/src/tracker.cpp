@@ -11,25 +11,48 @@ bool finite_and_bounded(float v) noexcept { return v == v && v > -1.0e6f && v < 
 // Rotate features found in `window` into the table frame, keep those that
 // land inside the ROI, once each, compacting them in place (an output index
 // never passes its input index).
+// The image window whose features can land in the ROI centred on (cx, cy):
+// the ROI itself unrotated, else the square holding it at any angle.
+// Precondition: the square's side fits 16 bits.
+ImageWindow frame_window(const TableView& table, std::int32_t cx, std::int32_t cy, bool rotated) noexcept {
+  if (!rotated) return {cx + table.roi_origin_x(), cy + table.roi_origin_y(), table.roi_width(), table.roi_height()};
+  const std::uint32_t side = tracker_window_side(table.roi_width(), table.roi_height(), table.roi_origin_x(), table.roi_origin_y());
+  const auto half = static_cast<std::int32_t>(side / 2);
+  return {cx - half, cy - half, static_cast<std::uint16_t>(side), static_cast<std::uint16_t>(side)};
+}
+
+// The ROI pixel a frame offset d = p - c lands on in the table frame, R(-theta) d
+// rounded; false outside the ROI.
+bool roi_pixel_of(const TableView& table, float dx, float dy, SinCos sc, std::uint32_t& bit, RoiPoint& at) noexcept {
+  const std::int32_t col = round_to_int(sc.cos * dx + sc.sin * dy) - table.roi_origin_x();
+  const std::int32_t row = round_to_int(-sc.sin * dx + sc.cos * dy) - table.roi_origin_y();
+  if (col < 0 || row < 0 || col >= table.roi_width() || row >= table.roi_height()) return false;
+  bit = static_cast<std::uint32_t>(row * table.roi_width() + col);
+  at = {static_cast<std::uint16_t>(col), static_cast<std::uint16_t>(row)};
+  return true;
+}
+
+// Sets `bit` in the de-duplication mask; false when it was already set.
+bool first_visit(std::span<std::uint8_t> mask, std::uint32_t bit) noexcept {
+  const std::uint8_t m = static_cast<std::uint8_t>(1u << (bit & 7u));
+  if (mask[bit >> 3] & m) return false;
+  mask[bit >> 3] = static_cast<std::uint8_t>(mask[bit >> 3] | m);
+  return true;
+}
+
 std::uint32_t rotate_into_roi(const TableView& table, std::span<RoiPoint> features, std::uint32_t count,
                               const ImageWindow& window, std::int32_t cx, std::int32_t cy, SinCos sc,
                               std::span<std::uint8_t> mask) noexcept {
   for (std::size_t i = 0; i < tracker_mask_bytes(table); ++i) mask[i] = 0;
-  const std::int32_t w = table.roi_width();
-  const std::int32_t h = table.roi_height();
   std::uint32_t kept = 0;
   for (std::uint32_t i = 0; i < count; ++i) {
-    const float dx = static_cast<float>(window.x0 + features[i].col - cx);
-    const float dy = static_cast<float>(window.y0 + features[i].row - cy);
-    // R(-theta) d
-    const std::int32_t col = round_to_int(sc.cos * dx + sc.sin * dy) - table.roi_origin_x();
-    const std::int32_t row = round_to_int(-sc.sin * dx + sc.cos * dy) - table.roi_origin_y();
-    if (col < 0 || row < 0 || col >= w || row >= h) continue;
-    const std::uint32_t bit = static_cast<std::uint32_t>(row * w + col);
-    const std::uint8_t m = static_cast<std::uint8_t>(1u << (bit & 7u));
-    if (mask[bit >> 3] & m) continue;
-    mask[bit >> 3] = static_cast<std::uint8_t>(mask[bit >> 3] | m);
-    features[kept++] = {static_cast<std::uint16_t>(col), static_cast<std::uint16_t>(row)};
+    std::uint32_t bit = 0;
+    RoiPoint at;
+    if (!roi_pixel_of(table, static_cast<float>(window.x0 + features[i].col - cx),
+                      static_cast<float>(window.y0 + features[i].row - cy), sc, bit, at)) {
+      continue;
+    }
+    if (first_visit(mask, bit)) features[kept++] = at;
   }
   return kept;
 }
@@ -72,22 +95,62 @@ Status prepare_frame(const TableView& table, const Detector& detector, const Ima
   const bool rotated = previous.theta_deg != 0.0f;
   if (rotated && scratch.roi_mask.size() < tracker_mask_bytes(table)) return Status::kBufferTooSmall;
 
-  ImageWindow window;
-  if (!rotated) {
-    window = {cx + table.roi_origin_x(), cy + table.roi_origin_y(), table.roi_width(), table.roi_height()};
-  } else {
-    const std::uint32_t side =
-        tracker_window_side(table.roi_width(), table.roi_height(), table.roi_origin_x(), table.roi_origin_y());
-    if (side > 0xFFFFu) return Status::kInvalidArgument;  // a window this large cannot be addressed
-    const auto half = static_cast<std::int32_t>(side / 2);
-    window = {cx - half, cy - half, static_cast<std::uint16_t>(side), static_cast<std::uint16_t>(side)};
+  if (rotated && tracker_window_side(table.roi_width(), table.roi_height(), table.roi_origin_x(), table.roi_origin_y()) > 0xFFFFu) {
+    return Status::kInvalidArgument;  // a window this large cannot be addressed
   }
+  const ImageWindow window = frame_window(table, cx, cy, rotated);
 
   FeatureCount found;
   GABARIT_TRY(extract_features(image, window, detector.kind, detector.threshold, scratch.features, found));
   std::uint32_t n = found.written;
   if (rotated) n = rotate_into_roi(table, scratch.features, n, window, cx, cy, sin_cos_deg(previous.theta_deg), scratch.roi_mask);
   out = {cx, cy, n, found.dropped};
+  return Status::kOk;
+}
+
+Status map_features(const TableView& table, std::span<const RoiPoint> detected, const ImageWindow& window,
+                    const Pose& previous, TrackerScratch scratch, PreparedFrame& out) noexcept {
+  if (!finite_and_bounded(previous.x) || !finite_and_bounded(previous.y) || !finite_and_bounded(previous.theta_deg)) {
+    return Status::kInvalidArgument;
+  }
+  if (scratch.counters.size() != voter_counter_count(table.cell_count()) ||
+      scratch.roi_mask.size() < tracker_mask_bytes(table)) {
+    return Status::kBufferTooSmall;
+  }
+  if (tracker_window_side(table.roi_width(), table.roi_height(), table.roi_origin_x(), table.roi_origin_y()) > 0xFFFFu) {
+    return Status::kInvalidArgument;
+  }
+  const std::int32_t cx = round_to_int(previous.x);
+  const std::int32_t cy = round_to_int(previous.y);
+  // prepare_frame's window: only features inside it are kept, so for a
+  // detector whose result does not depend on the window the features are
+  // exactly prepare_frame's. Features are in raster order: the first row is
+  // found by bisection and the scan stops past the last.
+  const ImageWindow own = frame_window(table, cx, cy, previous.theta_deg != 0.0f);
+  const std::int64_t first_row = std::int64_t{own.y0} - window.y0, last_row = first_row + own.height - 1;
+  const std::int64_t first_col = std::int64_t{own.x0} - window.x0, last_col = first_col + own.width - 1;
+  std::size_t lo = 0, hi = detected.size();
+  while (lo < hi) {
+    const std::size_t mid = lo + (hi - lo) / 2;
+    if (detected[mid].row < first_row) lo = mid + 1;
+    else hi = mid;
+  }
+  for (std::size_t i = 0; i < tracker_mask_bytes(table); ++i) scratch.roi_mask[i] = 0;
+  const SinCos sc = sin_cos_deg(previous.theta_deg);
+  std::uint32_t kept = 0, dropped = 0;
+  for (std::size_t i = lo; i < detected.size() && detected[i].row <= last_row; ++i) {
+    if (detected[i].col < first_col || detected[i].col > last_col) continue;
+    std::uint32_t bit = 0;
+    RoiPoint at;
+    if (!roi_pixel_of(table, static_cast<float>(window.x0 + detected[i].col - cx),
+                      static_cast<float>(window.y0 + detected[i].row - cy), sc, bit, at)) {
+      continue;
+    }
+    if (!first_visit(scratch.roi_mask, bit)) continue;
+    if (kept < scratch.features.size()) scratch.features[kept++] = at;
+    else ++dropped;
+  }
+  out = {cx, cy, kept, dropped};
   return Status::kOk;
 }
 

@@ -2,38 +2,57 @@
 
 #include <array>
 
+#include "gabarit/dense_voter.hpp"
+#include "gabarit/deterministic_math.hpp"
 #include "gabarit/refinement.hpp"
 
 namespace gabarit {
 namespace {
 
-// The recovery grid: 7 x 7 placements at three turns, nearest rings first
-// (ring = max(|i|, |j|)), turn 0 before the others within a ring. The first
-// kSearchNear (ring <= 1 at turn 0) are voted in every lost frame.
+// The recovery grid: (2 kSearchRings + 1)^2 ROI positions at 2 kSearchTurns + 1
+// angle offsets (multiples of search_turn_deg). Ordered in shells, nearest
+// first: shell = max(ring, |turn|) with ring = max(|i|, |j|); within a shell
+// by ring, then |turn|. The first kSearchNear (ring <= 1 at turn 0) are voted
+// in every lost frame, the rest search_budget at a time.
 struct SearchPlacement {
   std::int8_t i = 0, j = 0;
-  std::uint8_t turn = 0;
+  std::int8_t turn = 0;
 };
-constexpr std::uint32_t kSearchNear = 9;
-constexpr std::array<SearchPlacement, 147> make_search_placements() {
-  std::array<SearchPlacement, 147> out{};
+constexpr int abs_of(int v) { return v < 0 ? -v : v; }
+constexpr int max_of(int a, int b) { return a > b ? a : b; }
+constexpr std::array<SearchPlacement, kSearchPlacementCount> make_search_placements() {
+  std::array<SearchPlacement, kSearchPlacementCount> out{};
   std::size_t n = 0;
-  const auto ring_of = [](int i, int j) { return (i < 0 ? -i : i) > (j < 0 ? -j : j) ? (i < 0 ? -i : i) : (j < 0 ? -j : j); };
-  for (int pass = 0; pass < 2; ++pass)
-    for (int ring = 0; ring <= 3; ++ring)
-      for (int turn = 0; turn < 3; ++turn)
-        for (int j = -ring; j <= ring; ++j)
-          for (int i = -ring; i <= ring; ++i) {
-            const bool near = turn == 0 && ring <= 1;
-            if (ring_of(i, j) == ring && near == (pass == 0))
-              out[n++] = {static_cast<std::int8_t>(i), static_cast<std::int8_t>(j), static_cast<std::uint8_t>(turn)};
-          }
+  const auto add = [&](int i, int j, int turn) {
+    out[n++] = {static_cast<std::int8_t>(i), static_cast<std::int8_t>(j), static_cast<std::int8_t>(turn)};
+  };
+  for (int j = -1; j <= 1; ++j)
+    for (int i = -1; i <= 1; ++i) add(i, j, 0);
+  for (int shell = 0; shell <= max_of(kSearchRings, kSearchTurns); ++shell)
+    for (int ring = 0; ring <= kSearchRings; ++ring)
+      for (int t = 0; t <= kSearchTurns; ++t)
+        for (int sign = 1; sign >= -1; sign -= 2) {
+          if (max_of(ring, t) != shell || (t == 0 && sign < 0)) continue;
+          for (int j = -ring; j <= ring; ++j)
+            for (int i = -ring; i <= ring; ++i) {
+              if (max_of(abs_of(i), abs_of(j)) != ring || (ring <= 1 && t == 0)) continue;
+              add(i, j, sign * t);
+            }
+        }
   return out;
 }
-constexpr std::array<SearchPlacement, 147> kSearchPlacements = make_search_placements();
-static_assert(kSearchPlacements[0].i == 0 && kSearchPlacements[0].j == 0 && kSearchPlacements[8].turn == 0 &&
-                  kSearchPlacements[9].i == 0 && kSearchPlacements[9].turn == 1 && kSearchPlacements[146].turn == 2,
-              "the 9 near placements (turn 0, ring <= 1) first, then ring 0 turned, ring by ring");
+constexpr std::array<SearchPlacement, kSearchPlacementCount> kSearchPlacements = make_search_placements();
+constexpr bool all_distinct() {
+  for (std::size_t a = 0; a < kSearchPlacements.size(); ++a)
+    for (std::size_t b = a + 1; b < kSearchPlacements.size(); ++b)
+      if (kSearchPlacements[a].i == kSearchPlacements[b].i && kSearchPlacements[a].j == kSearchPlacements[b].j &&
+          kSearchPlacements[a].turn == kSearchPlacements[b].turn)
+        return false;
+  return true;
+}
+static_assert(all_distinct() && kSearchPlacements[8].i == 1 && kSearchPlacements[8].j == 1 &&
+                  kSearchPlacements[9].i == 0 && kSearchPlacements[9].turn == 1 && kSearchPlacements[10].turn == -1,
+              "every placement once: the 9 near ones first, then ring 0 turned by +-1 step, shell by shell");
 
 bool finite_pose(const Pose& p) noexcept {
   const auto ok = [](float v) { return v == v && v > -1.0e6f && v < 1.0e6f; };
@@ -45,16 +64,24 @@ TrackState state_of(Confidence c) noexcept { return c == Confidence::kHigh ? Tra
 }  // namespace
 
 Status TrackingSession::start(const SessionOptions& options, const Pose& initial) noexcept {
-  if (!valid(options.filter) || !finite_pose(initial) || initial.depth >= fine_.depth_count()) return Status::kInvalidArgument;
+  if (!valid(options.filter) || !finite_pose(initial) || options.coarse_proposals == 0 ||
+      options.coarse_proposals > kMaxCoarseProposals || options.screen_stride == 0 || options.search_interval == 0 || initial.depth >= fine_.depth_count()) return Status::kInvalidArgument;
   if (coarse_ != nullptr && coarse_->depth_count() != fine_.depth_count()) return Status::kInvalidArgument;
   options_ = options;
   pose_ = last_confident_ = initial;
   motion_ = confident_motion_ = {};
   frames_since_confident_ = 0;
-  search_cursor_ = 0;
+  search_cursor_[0] = search_cursor_[1] = 0;
+  lost_frames_ = searches_ = 0;
   reference_ = 0.0f;
   lost_ = false;
   return Status::kOk;
+}
+
+void TrackingSession::begin_lost() noexcept {
+  lost_ = true;
+  lost_frames_ = searches_ = 0;
+  search_cursor_[0] = search_cursor_[1] = 0;  // nearest placements first
 }
 
 // Classifies a score and keeps the reference score up to date. The first
@@ -110,7 +137,7 @@ Status TrackingSession::track_fine(const ImageView& image, SessionScratch scratc
     out.confidence = grade(out.step.score, normalised_score(out.step.runner_up));
     out.state = out.step.state;
     if (out.step.state != TrackState::kLost) pose_ = refined_pose(out.step.best.cell);
-    if (out.step.state == TrackState::kLost && options_.recover) lost_ = true;
+    if (out.step.state == TrackState::kLost && options_.recover) begin_lost();
     out.pose = pose_;
     return Status::kOk;
   }
@@ -171,7 +198,7 @@ Status TrackingSession::track_fine(const ImageView& image, SessionScratch scratc
   out.confidence = confidence;
   out.state = state_of(confidence);
   if (motion_.uncertainty_px > f.lost_uncertainty_px) {
-    lost_ = options_.recover;
+    if (options_.recover) begin_lost();
     out.state = TrackState::kLost;
   }
   out.pose = pose_;
@@ -179,74 +206,129 @@ Status TrackingSession::track_fine(const ImageView& image, SessionScratch scratc
 }
 
 Status TrackingSession::search(const ImageView& image, SessionScratch scratch, SessionResult& out) noexcept {
-  // Odd frames: where the target would be at its last confident velocity;
-  // even frames: where it was last seen.
+  // Every search_interval-th lost frame searches; the others only report lost.
+  const std::uint32_t interval = options_.search_interval;
+  if (lost_frames_++ % interval != 0) {
+    out.state = TrackState::kLost;
+    out.pose = pose_;
+    return Status::kOk;
+  }
+  // Alternate searches: where the target would be at its last confident
+  // velocity; where it was last seen.
+  const bool extrapolate = searches_++ % 2 == 0;
   Pose centre = last_confident_;
-  if (frames_since_confident_ % 2 == 1) {
+  if (extrapolate) {
     const auto n = static_cast<float>(frames_since_confident_);
     centre.x += n * confident_motion_.vx;
     centre.y += n * confident_motion_.vy;
     centre.theta_deg += n * confident_motion_.vtheta;
   }
-  Pose from = centre;
+  // Each placement's fine vote goes to a shortlist of the three best scores;
+  // each of those is then voted again from its own estimate (the target, once
+  // centred in the ROI, scores far above clutter) and the best is kept.
+  constexpr int kShortlist = 3;
+  Pose shortlist[kShortlist];
+  float shortlist_score[kShortlist] = {-1.0f, -1.0f, -1.0f};
+  // A grid search with scratch for it detects features once, over the whole
+  // search window, and scores each placement from them (map_features).
+  const std::uint32_t reach = search_reach(fine_);
+  const bool shared = coarse_ == nullptr && 2 * reach + 1 <= 0xFFFFu &&
+                      scratch.search_features.size() >= search_feature_capacity(fine_);
+  ImageWindow searched;
+  std::span<const RoiPoint> detected;
+  if (shared) {
+    const auto r = static_cast<std::int32_t>(reach);
+    const auto side = static_cast<std::uint16_t>(2 * reach + 1);
+    searched = {round_to_int(centre.x) - r, round_to_int(centre.y) - r, side, side};
+    FeatureCount found;
+    GABARIT_TRY(extract_features(image, searched, detector_.kind, detector_.threshold, scratch.search_features, found));
+    // Screening votes every screen_stride-th feature (in raster order): the
+    // target, when under a placement's ROI, still stands far above clutter,
+    // and the shortlist is voted again in full below.
+    std::uint32_t kept = 0;
+    for (std::uint32_t k = 0; k < found.written; k += options_.screen_stride) {
+      scratch.search_features[kept++] = scratch.search_features[k];
+    }
+    detected = scratch.search_features.first(kept);
+  }
+  const auto place = [&](const Pose& p) -> Status {
+    StepResult trial;
+    if (shared) {
+      PreparedFrame frame;
+      GABARIT_TRY(map_features(fine_, detected, searched, p, scratch.fine, frame));
+      GABARIT_TRY(clear_counters(fine_, scratch.fine.counters));
+      const std::span<const RoiPoint> features = scratch.fine.features.first(frame.features);
+      VoteTally tally;
+      if (!scratch.fine.dense_masks.empty()) {
+        GABARIT_TRY(accumulate_votes_dense(fine_, scratch.fine.dense_masks, features, scratch.fine.counters,
+                                           scratch.fine.dense_scratch, tally));
+      } else {
+        GABARIT_TRY(accumulate_votes(fine_, features, scratch.fine.counters, tally));
+      }
+      GABARIT_TRY(finish_frame(fine_, p, frame, scratch.fine.counters, tally, trial));
+    } else {
+      GABARIT_TRY(track_step(fine_, detector_, image, p, scratch.fine, trial));
+    }
+    if (trial.best.votes == 0) return Status::kOk;
+    for (int k = 0; k < kShortlist; ++k) {
+      if (trial.score > shortlist_score[k]) {
+        for (int m = kShortlist - 1; m > k; --m) {
+          shortlist[m] = shortlist[m - 1];
+          shortlist_score[m] = shortlist_score[m - 1];
+        }
+        shortlist[k] = trial.pose;
+        shortlist_score[k] = trial.score;
+        break;
+      }
+    }
+    return Status::kOk;
+  };
   if (coarse_ != nullptr) {
-    // The coarse vote only proposes where to look; the fine vote decides.
+    // The coarse vote only proposes where to look: its best cells are each
+    // checked by the fine table (in clutter the coarse winner alone is often
+    // wrong, its stencils being large), and the fine votes decide.
     StepResult coarse_step;
     GABARIT_TRY(track_step(*coarse_, detector_, image, centre, scratch.coarse, coarse_step));
     out.searched_coarse = true;
-    if (coarse_step.best.votes > 0) from = coarse_step.pose;
-    GABARIT_TRY(track_step(fine_, detector_, image, from, scratch.fine, out.step));
+    CellScore proposals[kMaxCoarseProposals];
+    const std::uint32_t wanted = options_.coarse_proposals < coarse_->cell_count() ? options_.coarse_proposals : coarse_->cell_count();
+    GABARIT_TRY(select_top_cells(*coarse_, scratch.coarse.counters, std::span<CellScore>(proposals, wanted)));
+    for (std::uint32_t k = 0; k < wanted && proposals[k].votes > 0; ++k) {
+      GABARIT_TRY(place(pose_of_cell(*coarse_, proposals[k].cell, centre, coarse_step.roi_centre_x, coarse_step.roi_centre_y)));
+    }
   } else {
-    // The fine table on a grid of placements; the best-scoring one is kept
-    // (its counters are recomputed below so refinement sees them).
-    const Axis ax = fine_.axis_x(), ay = fine_.axis_y();
-    const float sx = ax.max - ax.min + (ax.cells > 1 ? (ax.max - ax.min) / static_cast<float>(ax.cells - 1) : 1.0f);
-    const float sy = ay.max - ay.min + (ay.cells > 1 ? (ay.max - ay.min) / static_cast<float>(ay.cells - 1) : 1.0f);
-    const float turns[3] = {0.0f, options_.search_turn_deg, -options_.search_turn_deg};
-    // The three best placements by score, then each voted again from its own
-    // estimate: the target, once centred in the ROI, scores far above clutter.
-    constexpr int kShortlist = 3;
-    Pose shortlist[kShortlist];
-    float shortlist_score[kShortlist] = {-1.0f, -1.0f, -1.0f};
-    const auto place = [&](const SearchPlacement& at) -> Status {
+    // The fine table on a grid of placements around the centre.
+    const float sx = search_step(fine_.axis_x()), sy = search_step(fine_.axis_y());
+    const auto place_on_grid = [&](const SearchPlacement& at) -> Status {
       Pose p = centre;
       p.x += static_cast<float>(at.i) * sx;
       p.y += static_cast<float>(at.j) * sy;
-      p.theta_deg += turns[at.turn];
-      StepResult trial;
-      GABARIT_TRY(track_step(fine_, detector_, image, p, scratch.fine, trial));
-      if (trial.best.votes == 0) return Status::kOk;
-      for (int k = 0; k < kShortlist; ++k) {
-        if (trial.score > shortlist_score[k]) {
-          for (int m = kShortlist - 1; m > k; --m) {
-            shortlist[m] = shortlist[m - 1];
-            shortlist_score[m] = shortlist_score[m - 1];
-          }
-          shortlist[k] = trial.pose;
-          shortlist_score[k] = trial.score;
-          break;
-        }
-      }
-      return Status::kOk;
+      p.theta_deg += static_cast<float>(at.turn) * options_.search_turn_deg;
+      return place(p);
     };
     constexpr std::uint32_t kOuter = kSearchPlacements.size() - kSearchNear;
-    for (std::uint32_t k = 0; k < kSearchNear; ++k) GABARIT_TRY(place(kSearchPlacements[k]));
+    for (std::uint32_t k = 0; k < kSearchNear; ++k) GABARIT_TRY(place_on_grid(kSearchPlacements[k]));
+    // Each centre has its own cursor, so each one's grid is covered in turn.
+    std::uint32_t& cursor = search_cursor_[extrapolate ? 0 : 1];
     const std::uint32_t budget = options_.search_budget == 0 || options_.search_budget > kOuter ? kOuter : options_.search_budget;
     for (std::uint32_t k = 0; k < budget; ++k) {
-      GABARIT_TRY(place(kSearchPlacements[kSearchNear + (search_cursor_ + k) % kOuter]));
+      GABARIT_TRY(place_on_grid(kSearchPlacements[kSearchNear + (cursor + k) % kOuter]));
     }
-    search_cursor_ = (search_cursor_ + budget) % kOuter;
-    float best = -1.0f;
-    for (int k = 0; k < kShortlist && shortlist_score[k] >= 0.0f; ++k) {
-      StepResult again;
-      GABARIT_TRY(track_step(fine_, detector_, image, shortlist[k], scratch.fine, again));
-      if (again.score > best) {
-        best = again.score;
-        from = shortlist[k];
-      }
-    }
-    GABARIT_TRY(track_step(fine_, detector_, image, from, scratch.fine, out.step));
+    cursor = (cursor + budget) % kOuter;
   }
+  Pose from = centre;
+  float best = -1.0f;
+  for (int k = 0; k < kShortlist && shortlist_score[k] >= 0.0f; ++k) {
+    StepResult again;
+    GABARIT_TRY(track_step(fine_, detector_, image, shortlist[k], scratch.fine, again));
+    if (again.score > best) {
+      best = again.score;
+      from = again.pose;
+    }
+  }
+  // The best voted once more from its own estimate, which centres it better
+  // still (and leaves its counters for refinement).
+  GABARIT_TRY(track_step(fine_, detector_, image, from, scratch.fine, out.step));
   out.score = out.step.score;
   const float next = normalised_score(out.step.runner_up);
   const bool confident = out.step.best.votes > 0 &&

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <vector>
 
 #include "gabarit/deterministic_math.hpp"
@@ -113,6 +114,66 @@ TEST(Tracker, ScratchSizesAreCompileTimeFormulas) {
   static_assert(tracker_feature_capacity(4, 4, 0, 0) == 11 * 11);   // corner (3,3): r = 4.24 -> 5, side 11
   static_assert(tracker_mask_bytes(3, 3) == 2);
   SUCCEED();
+}
+
+}  // namespace
+}  // namespace gabarit
+
+namespace gabarit {
+namespace {
+
+// map_features on features detected once over a large window gives exactly
+// prepare_frame's features (binary detector: nothing depends on the window),
+// at any angle and wherever the ROI sits in the window, even half outside
+// the image.
+TEST(MapFeatures, MatchesPrepareFrameForAWindowIndependentDetector) {
+  host::Rng rng(77);
+  const auto pts = testing::random_points(rng, 40, 12);
+  const auto bytes = build(point_model(pts), "-3:3:7", "-3:3:7", "-1.5:1.5:3");
+  const TableView t = testing::open_table(bytes);
+  host::GrayImage image(180, 150);
+  for (auto& v : image.pixels) v = rng.bernoulli(0.15) ? 255 : 0;
+  const Detector binary{table_format::DetectorKind::kBinary, 0};
+  const ImageWindow big{-20, -30, 230, 210};  // the whole image and beyond
+  std::vector<RoiPoint> detected(feature_capacity(big.width, big.height));
+  FeatureCount found;
+  ASSERT_EQ(extract_features(image.view(), big, binary.kind, 0, detected, found), Status::kOk);
+  detected.resize(found.written);
+  Scratch a(t), b(t);
+  for (const Pose pose : {Pose{90, 75, 0, 0}, Pose{90.4f, 74.6f, 7.3f, 0}, Pose{60, 40, -33.0f, 0}, Pose{3, 140, 90.5f, 0},
+                          Pose{175.2f, 2.7f, 181.0f, 0}, Pose{120, 100, 0.01f, 0}}) {
+    SCOPED_TRACE(pose.theta_deg);
+    PreparedFrame expected, got;
+    ASSERT_EQ(prepare_frame(t, binary, image.view(), pose, a.view(), expected), Status::kOk);
+    ASSERT_EQ(map_features(t, detected, big, pose, b.view(), got), Status::kOk);
+    EXPECT_EQ(got.roi_centre_x, expected.roi_centre_x);
+    EXPECT_EQ(got.roi_centre_y, expected.roi_centre_y);
+    ASSERT_EQ(got.features, expected.features);
+    EXPECT_GT(got.features, 0u);
+    for (std::uint32_t i = 0; i < got.features; ++i) {
+      ASSERT_EQ(b.features[i].col, a.features[i].col) << i;
+      ASSERT_EQ(b.features[i].row, a.features[i].row) << i;
+    }
+  }
+}
+
+TEST(MapFeatures, RefusesBadArgumentsAndCountsWhatDoesNotFit) {
+  host::Rng rng(78);
+  const auto bytes = build(point_model(testing::random_points(rng, 30, 10)), "-2:2:5", "-2:2:5");
+  const TableView t = testing::open_table(bytes);
+  const std::vector<RoiPoint> detected = {{10, 10}, {11, 10}, {12, 11}, {30, 12}};
+  const ImageWindow window{0, 0, 40, 40};
+  Scratch s(t);
+  PreparedFrame out;
+  EXPECT_EQ(map_features(t, detected, window, Pose{std::nanf(""), 10, 0, 0}, s.view(), out), Status::kInvalidArgument);
+  TrackerScratch no_mask = s.view();
+  no_mask.roi_mask = {};
+  EXPECT_EQ(map_features(t, detected, window, Pose{11, 10, 0, 0}, no_mask, out), Status::kBufferTooSmall);
+  TrackerScratch two = s.view();
+  two.features = two.features.first(2);
+  ASSERT_EQ(map_features(t, detected, window, Pose{11, 10, 0, 0}, two, out), Status::kOk);
+  EXPECT_EQ(out.features, 2u);
+  EXPECT_EQ(out.features_dropped, 1u);  // (30, 12) lies outside the ROI: not counted
 }
 
 }  // namespace

@@ -28,9 +28,10 @@ int track(const std::vector<std::string>& argv) {
              {"--refine", "", "sub-cell x, y, theta from a parabola through the neighbouring cells' scores"},
              {"--recover", "", "once lost, search around the last confident pose until a confident hit"},
              {"--coarse", "T", "table for the recovery search (larger cells, wider window; implies --recover)"},
-             {"--search-budget", "N", "recovery grid placements per lost frame beyond the nearest 9, 1..138\n"
-                                     "(default: all 138; fewer costs less per lost frame and covers the grid over\n"
-                                     "several frames)"},
+             {"--search-budget", "N", "recovery grid placements per search beyond the nearest 9, 1..558 (default: all\n"
+                                     "558; fewer cost less and cover the grid over several searches)"},
+             {"--search-interval", "N", "search every N-th lost frame, 1..100 (default 1; the frames between only\n"
+                                       "predict, so a lost period costs about 1/N)"},
              {"--threads", "N", "vote each frame on N threads (plain loop only; same output), 1..64 (default 1)"},
              {"--focus-stack", "A.pgm,B.pgm,...", "the table's model images, one per depth: choose each frame's depth by\n"
                                                   "intensity (normalised cross-correlation) at the tracked pose"},
@@ -50,7 +51,8 @@ int track(const std::vector<std::string>& argv) {
   options.session.motion_filter = args.has("--motion-filter");
   options.session.refine = args.has("--refine");
   options.session.recover = args.has("--recover") || args.has("--coarse");
-  options.session.search_budget = static_cast<std::uint32_t>(args.integer("--search-budget", 0, 1, 138));
+  options.session.search_budget = static_cast<std::uint32_t>(args.integer("--search-budget", 0, 1, 558));
+  options.session.search_interval = static_cast<std::uint32_t>(args.integer("--search-interval", 1, 1, 100));
   options.threads = static_cast<unsigned>(args.integer("--threads", 1, 1, 64));
   if (options.threads > 1 && (options.session.motion_filter || options.session.refine || options.session.recover))
     throw UsageError("--threads applies to the plain loop, without --motion-filter, --refine, --recover or --coarse");

@@ -124,6 +124,17 @@ Status prepare_frame(const TableView& table, const Detector& detector, const Ima
                      TrackerScratch scratch, PreparedFrame& out) noexcept;
 Status finish_frame(const TableView& table, const Pose& previous, const PreparedFrame& frame,
                     std::span<const VoteCounter> counters, const VoteTally& tally, StepResult& result) noexcept;
+// prepare_frame from features already detected over a larger window (in
+// that window's coordinates, raster order, as extract_features writes them):
+// a search that places the ROI many times in one frame detects once. The
+// features kept are prepare_frame's, in the same order, wherever the
+// detector's result does not depend on the window (binary: everywhere;
+// gradient rows: except runs that cross prepare_frame's window edge, which
+// prepare_frame cuts). scratch.roi_mask is needed whatever the angle. Errors: kInvalidArgument for a non-finite pose,
+// kBufferTooSmall for short counters or mask; features beyond
+// scratch.features are counted as dropped.
+Status map_features(const TableView& table, std::span<const RoiPoint> detected, const ImageWindow& window,
+                    const Pose& previous, TrackerScratch scratch, PreparedFrame& out) noexcept;
 
 // The pose update for cell `cell` measured from `previous` with the ROI centred
 // on (cx, cy): (x, y) = c + R(theta) (t + offset), theta' = theta + a + offset,

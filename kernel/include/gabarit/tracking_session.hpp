@@ -3,22 +3,25 @@
 //   - the motion filter (motion_filter.hpp): the ROI at the predicted pose,
 //     candidates gated by the motion model, confidence, velocity;
 //   - sub-cell refinement (refinement.hpp) of the chosen cell;
-//   - recovery: once lost, each frame searches a coarse table (larger cells
-//     over a wider motion window, built from the same model), alternately
-//     around where the target would be had it kept the velocity it had at the
-//     last confident frame, and around that frame's pose (in case it
-//     stopped); the fine table then votes again from the coarse hit, and a
-//     high-confidence fine vote returns the session to tracking. Without a
-//     coarse table the fine table itself is placed on a grid around those
-//     places (7 x 7 ROI positions spaced by the table's x/y extent, at the
-//     angle offsets 0 and +-search_turn_deg), and the three best placements
-//     are voted again from their own estimates (the target, centred, scores
-//     far above clutter); the best must reach high confidence. A lost frame
-//     votes the 9 placements nearest the centre (no turn) and the next
-//     search_budget of the other 138 in turn, nearest rings first, so a
-//     lost frame costs about search_budget + 13 fine votes and the whole
-//     grid is covered every ceil(138 / search_budget) lost frames
-//     (search_budget 0: all 147 every frame).
+//   - recovery: once lost, every search_interval-th frame searches,
+//     alternately around where the target would be had it kept the velocity
+//     it had at the last confident frame, and around that frame's pose (in
+//     case it stopped). Candidates go to a shortlist of the three best fine
+//     votes; each is voted again from its own estimate (the target, centred,
+//     scores far above clutter), and the best must reach high confidence to
+//     return the session to tracking.
+//       Without a coarse table the candidates come from the fine table placed
+//     on a grid: 9 x 9 ROI positions spaced by its x/y extent (+-36 px for a
+//     +-4 px table, plus its own range) at 7 angle offsets, multiples of
+//     search_turn_deg (+-9 deg by default, plus its own range). With
+//     SessionScratch::search_features, features are detected once over the
+//     whole grid and each placement is screened with every screen_stride-th
+//     of them (map_features); without, each is a full track_step. A search
+//     votes the 9 placements nearest the centre and the next search_budget
+//     of the other 558 in turn, nearest shells first (search_budget 0: all).
+//       With a coarse table (larger cells over a wider window, built from
+//     the same model) the candidates are its coarse_proposals best cells,
+//     voted once at the centre.
 // With everything off (kPlainSession) a session is exactly track_step frame
 // after frame, a lost frame keeping the previous pose.
 // No heap: scratch comes from the caller, as for track_step.
@@ -33,20 +36,55 @@
 
 namespace gabarit {
 
+inline constexpr std::uint32_t kMaxCoarseProposals = 16;
+
 struct SessionOptions {
   bool motion_filter = true;
   bool refine = true;
   bool recover = true;  // search for the target once lost (else keep predicting)
   float search_turn_deg = 3.0f;  // the grid search's angle offsets
-  std::uint32_t search_budget = 0;  // grid placements beyond the nearest 9 per lost frame; 0 = all 138
+  std::uint32_t search_budget = 0;  // grid placements beyond the nearest 9 per search; 0 = all 558
+  std::uint32_t search_interval = 1;  // search every n-th lost frame (1: every one)
+  std::uint32_t screen_stride = 2;  // grid search with shared features: every n-th feature scores a placement
+  std::uint32_t coarse_proposals = 8;  // with a coarse table: its best cells checked by the fine table, 1..kMaxCoarseProposals
   MotionFilterParams filter;
 };
 // track_step frame after frame, nothing added: the thesis's tracker.
-inline constexpr SessionOptions kPlainSession{false, false, false, 3.0f, 0, {}};
+inline constexpr SessionOptions kPlainSession{false, false, false, 3.0f, 0, 1, 2, 8, {}};
+
+// The recovery grid (tracking_session.cpp): (2 kSearchRings + 1)^2 ROI
+// positions spaced by the fine table's x/y extent, at 2 kSearchTurns + 1
+// angle offsets spaced by search_turn_deg.
+inline constexpr int kSearchRings = 4;
+inline constexpr int kSearchTurns = 3;
+inline constexpr std::uint32_t kSearchPlacementCount = (2 * kSearchRings + 1) * (2 * kSearchRings + 1) * (2 * kSearchTurns + 1);
+inline constexpr std::uint32_t kSearchNear = 9;  // ring <= 1 at turn 0: voted at every search
+
+// The grid spacing: a table's x (or y) extent plus one cell.
+inline float search_step(const Axis& a) noexcept {
+  return a.max - a.min + (a.cells > 1 ? (a.max - a.min) / static_cast<float>(a.cells - 1) : 1.0f);
+}
+// The recovery grid's placements reach this far from the search centre:
+// kSearchRings grid steps, then the half-side of the window a rotated ROI
+// needs, plus a pixel for rounding.
+inline std::uint32_t search_reach(const TableView& fine) noexcept {
+  const float sx = search_step(fine.axis_x()), sy = search_step(fine.axis_y());
+  const auto grid = static_cast<std::uint32_t>(static_cast<float>(kSearchRings) * (sx > sy ? sx : sy)) + 1u;
+  return grid + tracker_window_side(fine.roi_width(), fine.roi_height(), fine.roi_origin_x(), fine.roi_origin_y()) / 2 + 1u;
+}
+inline std::size_t search_feature_capacity(const TableView& fine) noexcept {
+  const std::size_t side = 2 * std::size_t{search_reach(fine)} + 1;
+  return side * side;
+}
 
 struct SessionScratch {
   TrackerScratch fine;
   TrackerScratch coarse;  // for the coarse table; unused without one
+  // Optional, search_feature_capacity(fine) entries: the grid search then
+  // detects features once per lost frame and scores each placement from
+  // them with every second feature (SessionOptions::screen), instead of a
+  // full track_step per placement. Empty: track_step per placement.
+  std::span<RoiPoint> search_features = {};
 };
 
 struct SessionResult {
@@ -81,6 +119,7 @@ class TrackingSession {
   Status track_fine(const ImageView& image, SessionScratch scratch, SessionResult& out) noexcept;
   Status search(const ImageView& image, SessionScratch scratch, SessionResult& out) noexcept;
   Confidence grade(float score, float next_score) noexcept;
+  void begin_lost() noexcept;
 
   const TableView& fine_;
   const TableView* coarse_;
@@ -94,7 +133,9 @@ class TrackingSession {
   float reference_ = 0.0f;  // running score of high-confidence frames (motion_filter.hpp)
   bool lost_ = false;
   const FocusStack* stack_ = nullptr;
-  std::uint32_t search_cursor_ = 0;  // the next of the outer placements to vote
+  std::uint32_t lost_frames_ = 0;  // frames since the session became lost
+  std::uint32_t searches_ = 0;     // searches since then
+  std::uint32_t search_cursor_[2] = {0, 0};  // per search centre: the next of the outer placements to vote
 };
 
 }  // namespace gabarit

@@ -94,9 +94,14 @@ void run_tracking(const TableView& table, FrameSource& frames, const Pose& init,
   TrackerBuffers buffers(table, options.voter);
   std::optional<TrackerBuffers> coarse_buffers;
   SessionScratch scratch{buffers.scratch(), {}};
+  std::vector<RoiPoint> search_features;
   if (options.coarse != nullptr) {
     coarse_buffers.emplace(*options.coarse, options.voter);
     scratch.coarse = coarse_buffers->scratch();
+  } else if (options.session.recover && options.shared_search_features) {
+    // The grid search detects once per lost frame (tracking_session.hpp).
+    search_features.resize(search_feature_capacity(table));
+    scratch.search_features = search_features;
   }
   TrackingSession session(table, options.coarse, options.detector ? *options.detector : detector_of(table));
   if (const Status s = session.start(options.session, init); s != Status::kOk) {

@@ -62,6 +62,10 @@ struct TrackingOptions {
   // given, each frame's depth is chosen by intensity at the tracked pose
   // (depth_by_intensity.hpp). Only with a session (not the --threads loop).
   std::vector<GrayImage> focus_stack;
+  // The grid search detects features once per lost frame (scratch for it,
+  // SessionScratch::search_features); false: a full track_step per placement,
+  // as before (kept for the bench's comparison).
+  bool shared_search_features = true;
 };
 
 // Calls on_row for every frame. row.step is the frame's vote with the
