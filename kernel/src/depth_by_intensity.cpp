@@ -47,33 +47,45 @@ void correlations(const ImageView& frame, std::span<const ImageView> images, con
   const double step = static_cast<double>(stack.step);
   const std::int64_t step_x = round_fixed(c * step), step_y = round_fixed(sn * step);
   const double du0 = -static_cast<double>(stack.ref_x);
+  const std::uint32_t columns = (shape.width + stack.step - 1) / stack.step;  // samples per row
+  const std::int64_t x_limit = (std::int64_t{frame.width} - 1) * 65536, y_limit = (std::int64_t{frame.height} - 1) * 65536;
   for (std::uint32_t v = 0; v < shape.height; v += stack.step) {
     const double dv = static_cast<double>(v) - static_cast<double>(stack.ref_y);
-    std::int64_t px = round_fixed(static_cast<double>(pose.x) + c * du0 - sn * dv);
-    std::int64_t py = round_fixed(static_cast<double>(pose.y) + sn * du0 + c * dv);
-    for (std::uint32_t u = 0; u < shape.width; u += stack.step, px += step_x, py += step_y) {
+    const std::int64_t px0 = round_fixed(static_cast<double>(pose.x) + c * du0 - sn * dv);
+    const std::int64_t py0 = round_fixed(static_cast<double>(pose.y) + sn * du0 + c * dv);
+    // The samples whose 2 x 2 neighbourhood lies in the frame: positions are
+    // linear in k, so they form one run [k_begin, k_end), found from both ends.
+    const auto inside = [&](std::uint32_t k) {
+      const std::int64_t x = px0 + std::int64_t{k} * step_x, y = py0 + std::int64_t{k} * step_y;
+      return x >= 0 && y >= 0 && x < x_limit && y < y_limit;
+    };
+    std::uint32_t k_begin = 0, k_end = columns;
+    while (k_begin < k_end && !inside(k_begin)) ++k_begin;
+    while (k_end > k_begin && !inside(k_end - 1)) --k_end;
+    std::int64_t px = px0 + std::int64_t{k_begin} * step_x, py = py0 + std::int64_t{k_begin} * step_y;
+    const std::uint8_t* model_rows[kGroup];
+    for (std::size_t i = 0; i < images.size(); ++i) model_rows[i] = images[i].pixels + std::size_t{v} * images[i].stride;
+    for (std::uint32_t k = k_begin; k < k_end; ++k, px += step_x, py += step_y) {
       // The frame sampled bilinearly (weights in 1/256): the correlation then
       // varies smoothly with the angle, which the angle's parabola relies on.
-      if (px < 0 || py < 0) continue;
-      const auto ix = static_cast<std::uint64_t>(px) >> 16, iy = static_cast<std::uint64_t>(py) >> 16;
-      if (ix + 1 >= frame.width || iy + 1 >= frame.height) continue;
       const auto fx = static_cast<std::uint32_t>(px >> 8), fy = static_cast<std::uint32_t>(py >> 8);
       const std::uint32_t wx = fx & 255u, wy = fy & 255u;
-      const std::uint8_t* row0 = frame.pixels + static_cast<std::size_t>(iy) * frame.stride + static_cast<std::size_t>(ix);
+      const std::uint8_t* row0 = frame.pixels + static_cast<std::size_t>(py >> 16) * frame.stride + static_cast<std::size_t>(px >> 16);
       const std::uint8_t* row1 = row0 + frame.stride;
       const std::uint32_t top = row0[0] * (256u - wx) + row0[1] * wx;
       const std::uint32_t bottom = row1[0] * (256u - wx) + row1[1] * wx;
       const std::uint64_t b = (top * (256u - wy) + bottom * wy + 128u) >> 8;  // 0 .. 255 * 256
-      ++f.n;
       f.b += b;
       f.bb += b * b;
+      const std::uint32_t u = k * stack.step;
       for (std::size_t i = 0; i < images.size(); ++i) {
-        const std::uint64_t a = images[i].at(u, v);
+        const std::uint64_t a = model_rows[i][u];
         s[i].a += a;
         s[i].aa += a * a;
         s[i].ab += a * b;
       }
     }
+    f.n += k_end - k_begin;
   }
   // n^2 times the covariance and the variances. The sums are exact; the
   // products are taken in double, the same IEEE operations on every target.

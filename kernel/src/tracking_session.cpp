@@ -2,7 +2,6 @@
 
 #include <array>
 
-#include "gabarit/dense_voter.hpp"
 #include "gabarit/deterministic_math.hpp"
 #include "gabarit/refinement.hpp"
 
@@ -251,21 +250,29 @@ Status TrackingSession::search(const ImageView& image, SessionScratch scratch, S
     }
     detected = scratch.search_features.first(kept);
   }
+  const std::uint32_t per_depth = fine_.cell_count() / fine_.depth_count();
+  const std::uint32_t screen_depth = pose_.depth < fine_.depth_count() ? pose_.depth : 0u;
+  const std::uint32_t screen_begin = screen_depth * per_depth, screen_end = screen_begin + per_depth;
   const auto place = [&](const Pose& p) -> Status {
     StepResult trial;
     if (shared) {
+      // Screening: the cells of the last known depth only (depth changes
+      // slowly, and edges differ little between neighbouring depths); the
+      // shortlist is voted over every depth below.
       PreparedFrame frame;
       GABARIT_TRY(map_features(fine_, detected, searched, p, scratch.fine, frame));
-      GABARIT_TRY(clear_counters(fine_, scratch.fine.counters));
-      const std::span<const RoiPoint> features = scratch.fine.features.first(frame.features);
+      for (std::uint32_t c = screen_begin; c < screen_end; ++c) scratch.fine.counters[c] = 0;
       VoteTally tally;
-      if (!scratch.fine.dense_masks.empty()) {
-        GABARIT_TRY(accumulate_votes_dense(fine_, scratch.fine.dense_masks, features, scratch.fine.counters,
-                                           scratch.fine.dense_scratch, tally));
-      } else {
-        GABARIT_TRY(accumulate_votes(fine_, features, scratch.fine.counters, tally));
+      GABARIT_TRY(accumulate_votes_for_cells(fine_, scratch.fine.features.first(frame.features), scratch.fine.counters,
+                                             screen_begin, screen_end, tally));
+      CellScore best{kNoCell, 0, 0};
+      for (std::uint32_t c = screen_begin; c < screen_end; ++c) {
+        const CellScore cs{c, scratch.fine.counters[c], fine_.stencil_size(c)};
+        if (best.cell == kNoCell || ranks_before(cs, best)) best = cs;
       }
-      GABARIT_TRY(finish_frame(fine_, p, frame, scratch.fine.counters, tally, trial));
+      trial.best = best;
+      trial.score = normalised_score(best);
+      trial.pose = pose_of_cell(fine_, best.cell, p, frame.roi_centre_x, frame.roi_centre_y);
     } else {
       GABARIT_TRY(track_step(fine_, detector_, image, p, scratch.fine, trial));
     }
