@@ -108,6 +108,14 @@ expect 1 "the focus stack has 1 images; the table has 2 depths" $g track --table
   --motion-filter --focus-stack "$s/model_00.pgm"
 expect 2 "drop --threads" $g track --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init" --threads 2 \
   --focus-stack "$s/model_00.pgm,$s/model_01.pgm"
+# The cheaper recovery (a search every 2nd lost frame, every 3rd feature screening) still reacquires.
+$g track --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init" --motion-filter --refine --recover \
+  --search-interval 2 --screen-stride 3 -o "$s/pc.csv" 2>/dev/null || fail "track --search-interval --screen-stride"
+$g eval --gt "$s/gt.csv" --poses "$s/pc.csv" > "$s/accc.json" || fail "eval with --search-interval"
+grep -q '"reacquired_after_frames": \[[0-9]' "$s/accc.json" || fail "--search-interval 2: not reacquired: $(cat "$s/accc.json")"
+expect 2 "--search-interval" $g track --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init" --recover --search-interval 0
+expect 2 "--screen-stride" $g track --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init" --recover --screen-stride 17
+expect 2 "--search-budget" $g track --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init" --recover --search-budget 559
 expect 2 "applies to --scene" $g synth --shape curve --depths 3 -o "$work/x"
 expect 2 "one of --shape and --scene" $g synth -o "$work/x"
 expect 2 "--translations" $g tables build --model "$s/model_00.pgm" --x 0:0:1 --y 0:0:1 --translations middle -o "$work/x.gbt"

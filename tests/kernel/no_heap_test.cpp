@@ -143,7 +143,7 @@ int main() {
     return track_step(table, view, Pose{32, 32, -2.0f, 0}, dense, r) == Status::kOk;
   });
   // The session: start, a tracking frame, then lost frames (the recovery
-  // search places the table 147 times) on an empty image.
+  // search places the table 567 times) on an empty image.
   TrackingSession session(table, nullptr, detector_of(table));
   expect_no_allocation("tracking session start", [&] { return session.start(SessionOptions{}, Pose{32, 32, 0, 0}) == Status::kOk; });
   expect_no_allocation("tracking session, filter + refine + recovery", [&] {
@@ -151,6 +151,26 @@ int main() {
     bool ok = session.step(view, {scratch, {}}, r) == Status::kOk;
     for (int i = 0; i < 12 && ok; ++i) ok = session.step(blank.view(), {scratch, {}}, r) == Status::kOk;
     return ok && session.lost();
+  });
+  // The same with the recovery grid screened from features detected once per
+  // lost frame (map_features), and searching every 2nd lost frame.
+  std::vector<RoiPoint> search_features(search_feature_capacity(table));
+  TrackingSession screened(table, nullptr, detector_of(table));
+  expect_no_allocation("tracking session, recovery screened from shared features", [&] {
+    SessionOptions o;
+    o.search_interval = 2;
+    SessionResult r;
+    bool ok = screened.start(o, Pose{32, 32, 0, 0}) == Status::kOk && screened.step(view, {scratch, {}, search_features}, r) == Status::kOk;
+    for (int i = 0; i < 12 && ok; ++i) ok = screened.step(blank.view(), {scratch, {}, search_features}, r) == Status::kOk;
+    return ok && screened.lost();
+  });
+  expect_no_allocation("map_features", [&] {
+    PreparedFrame prepared;
+    const ImageWindow window{0, 0, 64, 64};
+    FeatureCount c;
+    return extract_features(view, window, detector_of(table).kind, detector_of(table).threshold, search_features, c) == Status::kOk &&
+           map_features(table, std::span<const RoiPoint>(search_features).first(c.written), window, Pose{32, 32, 4.0f, 0}, scratch,
+                        prepared) == Status::kOk;
   });
   // Depth by intensity, inside a session and on its own.
   const ImageView stack_views[2] = {view, view};
@@ -165,6 +185,6 @@ int main() {
     SessionResult r;
     return with_stack.start(SessionOptions{}, Pose{32, 32, 0, 0}) == Status::kOk && with_stack.step(view, {scratch, {}}, r) == Status::kOk;
   });
-  std::printf("%d passed, %d failed\n", 12 - failures, failures);
+  std::printf("%d passed, %d failed\n", 14 - failures, failures);
   return failures == 0 ? 0 : 1;
 }

@@ -108,7 +108,19 @@ std::string Args::help() const {
     std::string left = "  " + opt.name + (opt.value_name.empty() ? "" : " " + opt.value_name);
     if (left.size() < 26) left.resize(26, ' ');
     else left += "\n" + std::string(26, ' ');
-    o << left << opt.help << (opt.required ? " (required)" : "") << "\n";
+    // Continuation lines of a help text line up under its first line.
+    std::string text;
+    for (std::size_t at = 0, next = 0; at <= opt.help.size(); at = next + 1) {
+      next = opt.help.find('\n', at);
+      if (next == std::string::npos) next = opt.help.size();
+      std::string line = opt.help.substr(at, next - at);
+      if (at > 0) {
+        line.erase(0, line.find_first_not_of(' ') == std::string::npos ? line.size() : line.find_first_not_of(' '));
+        text += "\n" + std::string(26, ' ');
+      }
+      text += line;
+    }
+    o << left << text << (opt.required ? " (required)" : "") << "\n";
   }
   o << "  --help                  show this help\n";
   return o.str();

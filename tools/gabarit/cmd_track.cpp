@@ -27,14 +27,17 @@ int track(const std::vector<std::string>& argv) {
              {"--motion-filter", "", "predict the ROI, gate candidates by the motion model, grade confidence (thesis Alg. 4)"},
              {"--refine", "", "sub-cell x, y, theta from a parabola through the neighbouring cells' scores"},
              {"--recover", "", "once lost, search around the last confident pose until a confident hit"},
-             {"--coarse", "T", "table for the recovery search (larger cells, wider window; implies --recover)"},
+             {"--coarse", "T", "table for the recovery search (larger cells, wider window): its 8 best cells\n"
+                                  "are checked by the table instead of the search grid (implies --recover)"},
              {"--search-budget", "N", "recovery grid placements per search beyond the nearest 9, 1..558 (default: all\n"
                                      "558; fewer cost less and cover the grid over several searches)"},
+             {"--screen-stride", "N", "recovery placements are screened with every N-th feature, 1..16 (default 2)"},
              {"--search-interval", "N", "search every N-th lost frame, 1..100 (default 1; the frames between only\n"
                                        "predict, so a lost period costs about 1/N)"},
              {"--threads", "N", "vote each frame on N threads (plain loop only; same output), 1..64 (default 1)"},
              {"--focus-stack", "A.pgm,B.pgm,...", "the table's model images, one per depth: choose each frame's depth by\n"
-                                                  "intensity (normalised cross-correlation) at the tracked pose"},
+                                                  "intensity (normalised cross-correlation) at the tracked pose, and\n"
+                                                  "report the angle found the same way"},
              {"-o", "POSES.csv", "pose output (default stdout)"},
              {"--stats", "STATS.json", "per-frame timing and vote statistics"}});
   if (!args.parse(argv)) return 0;
@@ -53,6 +56,7 @@ int track(const std::vector<std::string>& argv) {
   options.session.recover = args.has("--recover") || args.has("--coarse");
   options.session.search_budget = static_cast<std::uint32_t>(args.integer("--search-budget", 0, 1, 558));
   options.session.search_interval = static_cast<std::uint32_t>(args.integer("--search-interval", 1, 1, 100));
+  options.session.screen_stride = static_cast<std::uint32_t>(args.integer("--screen-stride", 2, 1, 16));
   options.threads = static_cast<unsigned>(args.integer("--threads", 1, 1, 64));
   if (options.threads > 1 && (options.session.motion_filter || options.session.refine || options.session.recover))
     throw UsageError("--threads applies to the plain loop, without --motion-filter, --refine, --recover or --coarse");
