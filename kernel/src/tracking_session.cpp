@@ -63,8 +63,11 @@ TrackState state_of(Confidence c) noexcept { return c == Confidence::kHigh ? Tra
 }  // namespace
 
 Status TrackingSession::start(const SessionOptions& options, const Pose& initial) noexcept {
-  if (!valid(options.filter) || !finite_pose(initial) || options.coarse_proposals == 0 ||
-      options.coarse_proposals > kMaxCoarseProposals || options.screen_stride == 0 || options.search_interval == 0 || initial.depth >= fine_.depth_count()) return Status::kInvalidArgument;
+  const bool search_ok = options.coarse_proposals >= 1 && options.coarse_proposals <= kMaxCoarseProposals &&
+                         options.screen_stride >= 1 && options.search_interval >= 1;
+  if (!valid(options.filter) || !search_ok || !finite_pose(initial) || initial.depth >= fine_.depth_count()) {
+    return Status::kInvalidArgument;
+  }
   if (coarse_ != nullptr && coarse_->depth_count() != fine_.depth_count()) return Status::kInvalidArgument;
   options_ = options;
   pose_ = last_confident_ = initial;

@@ -81,9 +81,10 @@ struct SessionScratch {
   TrackerScratch fine;
   TrackerScratch coarse;  // for the coarse table; unused without one
   // Optional, search_feature_capacity(fine) entries: the grid search then
-  // detects features once per lost frame and scores each placement from
-  // them with every second feature (SessionOptions::screen), instead of a
-  // full track_step per placement. Empty: track_step per placement.
+  // detects features once per search and screens each placement with every
+  // screen_stride-th of them, over the last known depth's cells, instead of
+  // a full track_step per placement. Empty: track_step per placement (for a
+  // part short of RAM: about 4 bytes per pixel of the search window).
   std::span<RoiPoint> search_features = {};
 };
 
