@@ -151,6 +151,8 @@ class Board {
         buffers_(table, c.voter),
         session_(table, nullptr, c.binary ? Detector{table_format::DetectorKind::kBinary, 0} : detector_of(table)),
         running_(!c.start_stopped) {
+    // As gabarit track: the recovery search detects features once per search.
+    if (c.session.recover) search_features_.resize(search_feature_capacity(table));
     if (session_.start(c.session, cli::parse_init_pose(c.init_text, table, "--init")) != Status::kOk)
       throw cli::UsageError("--init: not a usable starting pose");
   }
@@ -295,7 +297,7 @@ class Board {
     host::TrackRow row;
     row.frame = static_cast<std::uint32_t>(tracked_);
     SessionResult result;
-    if (const Status s = session_.step(image, {buffers_.scratch(), {}}, result); s != Status::kOk) {
+    if (const Status s = session_.step(image, {buffers_.scratch(), {}, search_features_}, result); s != Status::kOk) {
       ++bad_frames_;
       progress("frame %u not tracked: %s", frame.sequence, status_name(s));
       return;
@@ -323,6 +325,7 @@ class Board {
   board::UdpSender udp_;
   board::FrameCounter counter_;
   std::vector<std::uint8_t> luma_;
+  std::vector<RoiPoint> search_features_;  // the recovery search's (tracking_session.hpp)
   bool running_;
   bool stop_ = false;
   int backoff_ms_ = 0;  // wait before the next reopen attempt
