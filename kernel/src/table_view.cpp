@@ -3,19 +3,13 @@
 #include <cstring>
 
 #include "gabarit/crc32.hpp"
+#include "gabarit/deterministic_math.hpp"
 
 namespace gabarit {
 namespace {
 
 namespace off = table_format::offset;
 namespace coff = table_format::cell_offset;
-using table_format::align_up;
-
-bool is_finite(float f) noexcept {
-  std::uint32_t bits;
-  std::memcpy(&bits, &f, sizeof bits);
-  return (bits & 0x7F800000u) != 0x7F800000u;
-}
 
 bool all_zero(const std::byte* p, std::size_t n) noexcept {
   for (std::size_t i = 0; i < n; ++i) {
@@ -118,28 +112,20 @@ Status TableView::open(std::span<const std::byte> bytes, TableView& out) noexcep
     return Status::kBadHeaderField;
   }
 
-  // Sections follow the header in a fixed order, each 8-byte aligned, with no
-  // gaps beyond alignment: the layout is canonical, so any other offset is an error.
+  // The layout is canonical (table_format::layout_of), so any other offset is an error.
   const std::uint32_t pixels = std::uint32_t{roi_width} * roi_height;
-  std::uint32_t at = table_format::kHeaderBytes;
-  const std::uint32_t cells_at = at;
-  at = align_up(at + cell_count * table_format::kCellDescriptorBytes);
-  const std::uint32_t offsets_at = at;
-  at = align_up(at + (pixels + 1) * 4);
-  const std::uint32_t refs_at = at;
-  at = align_up(at + reference_count * reference_bytes);
-  const std::uint32_t counts_at = at;
-  at = align_up(at + std::uint32_t{depth_count} * 4);
-  const std::uint32_t points_at = at;
-  at = align_up(at + model_point_count * table_format::kModelPointBytes);
-  if (load_le<std::uint32_t>(b + off::kCellsOffset) != cells_at ||
-      load_le<std::uint32_t>(b + off::kPixelOffsetsOffset) != offsets_at ||
-      load_le<std::uint32_t>(b + off::kReferencesOffset) != refs_at ||
-      load_le<std::uint32_t>(b + off::kModelCountsOffset) != counts_at ||
-      load_le<std::uint32_t>(b + off::kModelPointsOffset) != points_at) {
+  const table_format::Layout layout =
+      table_format::layout_of({cell_count, pixels, reference_count, reference_bytes, depth_count, model_point_count});
+  if (load_le<std::uint32_t>(b + off::kCellsOffset) != layout.cells ||
+      load_le<std::uint32_t>(b + off::kPixelOffsetsOffset) != layout.pixel_offsets ||
+      load_le<std::uint32_t>(b + off::kReferencesOffset) != layout.references ||
+      load_le<std::uint32_t>(b + off::kModelCountsOffset) != layout.model_counts ||
+      load_le<std::uint32_t>(b + off::kModelPointsOffset) != layout.model_points) {
     return Status::kSectionOutOfBounds;
   }
-  if (at != file_bytes) return Status::kSizeMismatch;
+  if (layout.file_bytes != file_bytes) return Status::kSizeMismatch;
+  const std::uint32_t cells_at = layout.cells, offsets_at = layout.pixel_offsets, refs_at = layout.references,
+                      counts_at = layout.model_counts, points_at = layout.model_points;
 
   // CSR offsets: start at 0, never decrease, end at the reference count.
   const std::byte* offsets = b + offsets_at;

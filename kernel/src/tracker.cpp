@@ -6,7 +6,6 @@
 namespace gabarit {
 namespace {
 
-bool finite_and_bounded(float v) noexcept { return v == v && v > -1.0e6f && v < 1.0e6f; }
 
 // Rotate features found in `window` into the table frame, keep those that
 // land inside the ROI, once each, compacting them in place (an output index
@@ -84,8 +83,7 @@ Pose pose_of_cell(const TableView& table, std::uint32_t cell_index, const Pose& 
 
 Status prepare_frame(const TableView& table, const Detector& detector, const ImageView& image, const Pose& previous,
                      TrackerScratch scratch, PreparedFrame& out) noexcept {
-  if (!image.valid() || !finite_and_bounded(previous.x) || !finite_and_bounded(previous.y) ||
-      !finite_and_bounded(previous.theta_deg)) {
+  if (!image.valid() || !pose_in_range(previous)) {
     return Status::kInvalidArgument;
   }
   if (scratch.counters.size() != voter_counter_count(table.cell_count())) return Status::kBufferTooSmall;
@@ -110,7 +108,7 @@ Status prepare_frame(const TableView& table, const Detector& detector, const Ima
 
 Status map_features(const TableView& table, std::span<const RoiPoint> detected, const ImageWindow& window,
                     const Pose& previous, TrackerScratch scratch, PreparedFrame& out) noexcept {
-  if (!finite_and_bounded(previous.x) || !finite_and_bounded(previous.y) || !finite_and_bounded(previous.theta_deg)) {
+  if (!pose_in_range(previous)) {
     return Status::kInvalidArgument;
   }
   if (scratch.counters.size() != voter_counter_count(table.cell_count()) ||

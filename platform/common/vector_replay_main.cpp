@@ -6,7 +6,7 @@
 #include <utility>
 #include <vector>
 
-#include "gabarit/platform/test_vectors.hpp"
+#include "gabarit/app/test_vectors.hpp"
 #include "gabarit/table_view.hpp"
 #include "gabarit/tracker.hpp"
 

@@ -10,7 +10,7 @@
 
 #include "board.hpp"
 #include "console.hpp"
-#include "gabarit/platform/test_vectors.hpp"
+#include "gabarit/app/test_vectors.hpp"
 #include "gabarit/table_view.hpp"
 #include "gabarit/tracker.hpp"
 

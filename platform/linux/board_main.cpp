@@ -18,11 +18,12 @@
 #include <string>
 #include <vector>
 
-#include "args.hpp"
 #include "frame_counter.hpp"
+#include "gabarit/app/args.hpp"
+#include "gabarit/app/mapped_file.hpp"
+#include "gabarit/app/pose_row.hpp"
+#include "gabarit/app/scratch.hpp"
 #include "gabarit/crc32.hpp"
-#include "gabarit/host/mapped_file.hpp"
-#include "gabarit/host/tracking_run.hpp"
 #include "gabarit/tracking_session.hpp"
 #include "gpio_lines.hpp"
 #include "luma.hpp"
@@ -44,7 +45,7 @@ struct Config {
   std::string udp;
   bool binary = false;
   bool start_stopped = false;
-  host::VoterChoice voter = host::VoterChoice::kAuto;
+  app::VoterChoice voter = app::VoterChoice::kAuto;
   std::uint64_t max_frames = 0;        // 0: until stopped
   int frame_timeout_ms = 2000;         // report a stall after this long without a frame
   int reopen_min_ms = 250;             // first wait after losing the device (lets an unplug settle)
@@ -59,11 +60,11 @@ std::uint32_t parse_format(const std::string& text) {
   if (text == "GREY") return board::kFourccGrey;
   if (text == "YUYV") return board::kFourccYuyv;
   if (text == "NV12") return board::kFourccNv12;
-  throw cli::UsageError("--format '" + text + "': want auto, GREY, YUYV or NV12");
+  throw app::UsageError("--format '" + text + "': want auto, GREY, YUYV or NV12");
 }
 
 Config parse(int argc, char** argv, bool& help_shown) {
-  cli::Args args(
+  app::Args args(
       "gabarit-board", "--device /dev/videoN --table T --init X,Y[,THETA[,DEPTH]] [options]",
       "Tracks the table's model in frames from a V4L2 capture device. Writes one line per tracked frame to\n"
       "stdout: frame,x,y,theta_deg,depth,votes,score,status (as `gabarit track`), then the driver's frame\n"
@@ -100,22 +101,19 @@ Config parse(int argc, char** argv, bool& help_shown) {
   c.capture.device = args.get_or("--device", c.capture.device);
   c.capture.pixel_format = parse_format(args.get_or("--format", "auto"));
   if (args.has("--size")) {
-    unsigned w = 0, h = 0;
-    char tail = 0;
-    if (std::sscanf(args.get("--size").c_str(), "%ux%u%c", &w, &h, &tail) != 2 || w < 8 || h < 8 || w > 8192 || h > 8192)
-      throw cli::UsageError("--size '" + args.get("--size") + "': want WxH with 8 <= W,H <= 8192");
-    c.capture.width = w;
-    c.capture.height = h;
+    const app::FrameSize size = app::parse_size(args.get("--size"), "--size", 8, 8192);
+    c.capture.width = size.width;
+    c.capture.height = size.height;
   }
   c.table_path = args.get("--table");
   c.init_text = args.get("--init");
   c.binary = args.has("--binary");
-  c.voter = cli::parse_voter(args.get_or("--voter", "auto"), "--voter");
+  c.voter = app::parse_voter(args.get_or("--voter", "auto"), "--voter");
   c.max_frames = static_cast<std::uint64_t>(args.integer("--frames", 0, 0, INT64_MAX));
   c.frame_timeout_ms = static_cast<int>(args.integer("--frame-timeout-ms", 2000, 10, 3600000));
   c.reopen_min_ms = static_cast<int>(args.integer("--reopen-min-ms", 250, 1, 600000));
   c.reopen_max_ms = static_cast<int>(args.integer("--reopen-max-ms", 2000, 1, 600000));
-  if (c.reopen_max_ms < c.reopen_min_ms) throw cli::UsageError("--reopen-max-ms is smaller than --reopen-min-ms");
+  if (c.reopen_max_ms < c.reopen_min_ms) throw app::UsageError("--reopen-max-ms is smaller than --reopen-min-ms");
   c.udp = args.get_or("--udp", "");
   c.gpio.chip = args.get_or("--gpio-chip", "");
   c.gpio.lock_line = static_cast<int>(args.integer("--lock-line", -1, 0, 65535));
@@ -123,10 +121,10 @@ Config parse(int argc, char** argv, bool& help_shown) {
   c.gpio.trigger_line = static_cast<int>(args.integer("--trigger-line", -1, 0, 65535));
   c.gpio.strobe_us = static_cast<std::uint32_t>(args.integer("--strobe-us", 100, 1, 1000000));
   const bool any_line = c.gpio.lock_line >= 0 || c.gpio.strobe_line >= 0 || c.gpio.trigger_line >= 0;
-  if (any_line && c.gpio.chip.empty()) throw cli::UsageError("--lock-line/--strobe-line/--trigger-line need --gpio-chip");
-  if (!c.gpio.chip.empty() && !any_line) throw cli::UsageError("--gpio-chip given without any line");
+  if (any_line && c.gpio.chip.empty()) throw app::UsageError("--lock-line/--strobe-line/--trigger-line need --gpio-chip");
+  if (!c.gpio.chip.empty() && !any_line) throw app::UsageError("--gpio-chip given without any line");
   c.start_stopped = args.has("--start-stopped");
-  if (c.start_stopped && c.gpio.trigger_line < 0) throw cli::UsageError("--start-stopped needs --trigger-line");
+  if (c.start_stopped && c.gpio.trigger_line < 0) throw app::UsageError("--start-stopped needs --trigger-line");
   c.frame_crc = args.has("--frame-crc");
   c.session.motion_filter = args.has("--motion-filter");
   c.session.refine = args.has("--refine");
@@ -146,15 +144,13 @@ class Board {
  public:
   Board(const Config& c, const TableView& table, int signal_fd)
       : c_(c),
-        table_(table),
         signal_fd_(signal_fd),
-        buffers_(table, c.voter),
+        // As gabarit track: the recovery search detects features once per search.
+        buffers_(table, nullptr, c.voter, c.session.recover),
         session_(table, nullptr, c.binary ? Detector{table_format::DetectorKind::kBinary, 0} : detector_of(table)),
         running_(!c.start_stopped) {
-    // As gabarit track: the recovery search detects features once per search.
-    if (c.session.recover) search_features_.resize(search_feature_capacity(table));
-    if (session_.start(c.session, cli::parse_init_pose(c.init_text, table, "--init")) != Status::kOk)
-      throw cli::UsageError("--init: not a usable starting pose");
+    if (session_.start(c.session, app::parse_init_pose(c.init_text, table, "--init")) != Status::kOk)
+      throw app::UsageError("--init: not a usable starting pose");
   }
 
   int run() {
@@ -210,7 +206,7 @@ class Board {
                  "%llu unusable, %llu device losses, %llu stalls, %llu UDP sends failed\n",
                  ull(tracked_), ull(counter_total_delivered()), ull(dropped_), ull(error_frames_), ull(bad_frames_),
                  ull(losses_), ull(stalls_), ull(udp_.failed()));
-    return status_;
+    return 0;
   }
 
  private:
@@ -294,20 +290,20 @@ class Board {
       progress("frame %u skipped: %s", frame.sequence, board::luma_status_name(s));
       return;
     }
-    host::TrackRow row;
+    app::TrackRow row;
     row.frame = static_cast<std::uint32_t>(tracked_);
     SessionResult result;
-    if (const Status s = session_.step(image, {buffers_.scratch(), {}, search_features_}, result); s != Status::kOk) {
+    if (const Status s = session_.step(image, buffers_.scratch(), result); s != Status::kOk) {
       ++bad_frames_;
       progress("frame %u not tracked: %s", frame.sequence, status_name(s));
       return;
     }
-    host::fill_row(row, result);  // the same row as gabarit track writes
+    app::fill_row(row, result);  // the same row as gabarit track writes
     ++tracked_;
     char tail[64];
     int n = std::snprintf(tail, sizeof tail, ",%u,%llu", frame.sequence, ull(frame.timestamp_us));
     if (c_.frame_crc) std::snprintf(tail + n, sizeof tail - static_cast<std::size_t>(n), ",%08x", luma_crc32(image));
-    const std::string line = host::pose_csv_row(row) + tail;
+    const std::string line = app::pose_csv_row(row) + tail;
     std::printf("%s\n", line.c_str());
     udp_.send(line);
     bool ok = gpio_.set_lock(row.step.state == TrackState::kTracking);
@@ -316,20 +312,17 @@ class Board {
   }
 
   const Config& c_;
-  const TableView& table_;
   int signal_fd_;
-  host::TrackerBuffers buffers_;
+  app::SessionBuffers buffers_;
   TrackingSession session_;
   board::V4l2Capture capture_;
   board::GpioLines gpio_;
   board::UdpSender udp_;
   board::FrameCounter counter_;
   std::vector<std::uint8_t> luma_;
-  std::vector<RoiPoint> search_features_;  // the recovery search's (tracking_session.hpp)
   bool running_;
   bool stop_ = false;
   int backoff_ms_ = 0;  // wait before the next reopen attempt
-  int status_ = 0;
   std::uint64_t tracked_ = 0, delivered_ = 0, dropped_ = 0, error_frames_ = 0, bad_frames_ = 0, losses_ = 0, stalls_ = 0;
 };
 
@@ -355,13 +348,10 @@ int main(int argc, char** argv) {
     bool help = false;
     const Config config = parse(argc, argv, help);
     if (help) return 0;
-    host::MappedFile file(config.table_path);
-    TableView table;
-    if (const Status s = TableView::open(file.bytes(), table); s != Status::kOk)
-      throw host::Error(config.table_path + ": not a valid table: " + status_name(s));
-    Board board(config, table, signal_fd);
+    const app::TableFile table(config.table_path);
+    Board board(config, table.view(), signal_fd);
     return board.run();
-  } catch (const cli::UsageError& e) {
+  } catch (const app::UsageError& e) {
     std::fprintf(stderr, "gabarit-board: %s\n(see gabarit-board --help)\n", e.what());
     return 2;
   } catch (const std::exception& e) {

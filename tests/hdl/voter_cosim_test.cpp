@@ -16,7 +16,7 @@
 
 #include "Vvoter_l1.h"
 #include "Vvoter_l4.h"
-#include "experiments.hpp"
+#include "gabarit/host/voter_trials.hpp"
 #include "gabarit/features.hpp"
 #include "gabarit/host/thesis_shapes.hpp"
 #include "test_tables.hpp"
@@ -129,15 +129,15 @@ TEST(VoterCosim, FourLanesMatchTheKernelOnRandomTables) { random_cosim<Vvoter_l4
 // targets, from exact cycle counts (deterministic, not wall-clock).
 template <class Model>
 void sequence_cosim(const char* model, std::uint32_t lanes, double min_votes_per_clock) {
-  const bench::Shape shape = bench::make_shape("curve", host::thesis_curve());
-  const auto bytes = bench::shape_table(shape, 1.0, 1);
+  const host::Shape shape = host::make_shape("curve", host::thesis_curve());
+  const auto bytes = host::shape_table(shape, 1.0, 1);
   TableView t;
   ASSERT_EQ(TableView::open(bytes, t), Status::kOk);
   Harness<Model> h;
   h.load(host::hdl_layout(t, lanes), lanes);
   std::uint64_t votes = 0, vote_cycles = 0;
   for (double noise : {0.2, 0.4}) {
-    const auto trials = bench::make_trials(shape, noise, 25, 99);
+    const auto trials = host::make_trials(shape, noise, 25, 99);
     for (std::size_t i = 0; i < trials.size(); ++i) {
       const auto f = trial_features(t, trials[i].frame, trials[i].previous.x, trials[i].previous.y);
       host::Rng rng(i);

@@ -18,7 +18,7 @@
 
 #include "gabarit/features.hpp"
 #include "gabarit/host/hdl_export.hpp"
-#include "gabarit/host/image_io.hpp"
+#include "gabarit/app/image_io.hpp"
 #include "gabarit/host/rng.hpp"
 #include "gabarit/voter.hpp"
 
@@ -67,7 +67,7 @@ inline Outcome kernel_outcome(const TableView& t, const std::vector<RoiPoint>& f
 
 // The binary features of a synthetic trial frame, with the table's ROI
 // centred on the trial's previous position (what the tracker would vote with).
-inline std::vector<RoiPoint> trial_features(const TableView& t, const host::GrayImage& frame, std::int32_t x, std::int32_t y) {
+inline std::vector<RoiPoint> trial_features(const TableView& t, const app::GrayImage& frame, std::int32_t x, std::int32_t y) {
   const ImageWindow w{x + t.roi_origin_x(), y + t.roi_origin_y(), t.roi_width(), t.roi_height()};
   std::vector<RoiPoint> f(t.roi_pixels());
   FeatureCount fc;

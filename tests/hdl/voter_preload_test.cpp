@@ -4,9 +4,9 @@
 #include <gtest/gtest.h>
 
 #include "Vvoter_preload.h"
-#include "experiments.hpp"
+#include "gabarit/host/voter_trials.hpp"
 #include "gabarit/features.hpp"
-#include "gabarit/host/mapped_file.hpp"
+#include "gabarit/app/mapped_file.hpp"
 #include "gabarit/host/thesis_shapes.hpp"
 #include "voter_harness.hpp"
 
@@ -14,15 +14,15 @@ namespace gabarit::hdl {
 namespace {
 
 TEST(VoterPreload, ExportedImagesLoadedByReadmemhVoteLikeTheKernel) {
-  const auto bytes = host::read_file(GABARIT_PRELOAD_TABLE);
+  const auto bytes = app::read_file(GABARIT_PRELOAD_TABLE);
   TableView t;
   ASSERT_EQ(TableView::open(bytes, t), Status::kOk);
   Harness<Vvoter_preload> h;
   h.model().cell_count_i = t.cell_count();
   h.model().roi_width_i = t.roi_width();
   h.model().roi_height_i = t.roi_height();
-  const bench::Shape shape = bench::make_shape("curve", host::thesis_curve());
-  const auto trials = bench::make_trials(shape, 0.3, 10, 5);
+  const host::Shape shape = host::make_shape("curve", host::thesis_curve());
+  const auto trials = host::make_trials(shape, 0.3, 10, 5);
   for (std::size_t i = 0; i < trials.size(); ++i) {
     const auto f = trial_features(t, trials[i].frame, trials[i].previous.x, trials[i].previous.y);
     host::Rng rng(i);

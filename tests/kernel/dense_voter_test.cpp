@@ -8,7 +8,7 @@
 
 #include <vector>
 
-#include "gabarit/host/image_io.hpp"
+#include "gabarit/app/image_io.hpp"
 #include "gabarit/tracker.hpp"
 #include "test_tables.hpp"
 
@@ -78,7 +78,7 @@ TEST(DenseVoter, TrackingStepsAreIdenticalWithEitherVoter) {
   std::vector<VoteCounter> counters(t.cell_count());
   std::vector<std::uint8_t> mask(tracker_mask_bytes(t));
   for (int frame = 0; frame < 30; ++frame) {
-    host::GrayImage img(90, 80);
+    app::GrayImage img(90, 80);
     for (auto& p : img.pixels) p = rng.bernoulli(0.25) ? 255 : 0;
     const Pose pose{45.0f + static_cast<float>(rng.uniform_int(-3, 3)), 40, frame % 3 == 0 ? 0.0f : 4.5f, 0};
     for (auto kind : {table_format::DetectorKind::kBinary, table_format::DetectorKind::kGradientRows}) {

@@ -9,12 +9,12 @@
 #include <vector>
 
 #include "gabarit/deterministic_math.hpp"
-#include "gabarit/host/image_io.hpp"
+#include "gabarit/app/image_io.hpp"
 
 namespace gabarit {
 namespace {
 
-using host::GrayImage;
+using app::GrayImage;
 
 // Three 41x41 stack images that differ in texture, as blurring a tilted
 // object does: depth d has stripes of period 4 + 3d, so they correlate poorly.

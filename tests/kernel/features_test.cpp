@@ -4,12 +4,12 @@
 
 #include <vector>
 
-#include "gabarit/host/image_io.hpp"
+#include "gabarit/app/image_io.hpp"
 
 namespace gabarit {
 namespace {
 
-using host::GrayImage;
+using app::GrayImage;
 
 std::vector<RoiPoint> run_binary(const GrayImage& img, ImageWindow w, std::size_t capacity, FeatureCount& count) {
   std::vector<RoiPoint> out(capacity);
@@ -113,15 +113,15 @@ namespace gabarit {
 namespace {
 
 // A vertical step edge of height 120 between columns 9 and 10 of a 20x12 image.
-host::GrayImage step_edge(std::uint8_t left, std::uint8_t right) {
-  host::GrayImage img(20, 12);
+app::GrayImage step_edge(std::uint8_t left, std::uint8_t right) {
+  app::GrayImage img(20, 12);
   for (std::uint32_t y = 0; y < 12; ++y)
     for (std::uint32_t x = 0; x < 20; ++x) img.at(x, y) = x < 10 ? left : right;
   return img;
 }
 
 TEST(Canny, AStepEdgeGivesOnePixelWideLineAfterNonMaximumSuppression) {
-  const host::GrayImage img = step_edge(20, 140);
+  const app::GrayImage img = step_edge(20, 140);
   std::vector<RoiPoint> out(240);
   FeatureCount n;
   ASSERT_EQ(extract_canny(img.view(), {0, 0, 20, 12}, 200, out, n), Status::kOk);
@@ -137,12 +137,12 @@ TEST(Canny, AStepEdgeGivesOnePixelWideLineAfterNonMaximumSuppression) {
 
 TEST(Canny, WeakEdgesSurviveOnlyNextToStrongOnes) {
   // Magnitude of a step of h grey levels is 4h: a 40-level step gives 160.
-  const host::GrayImage weak = step_edge(100, 140);
+  const app::GrayImage weak = step_edge(100, 140);
   std::vector<RoiPoint> out(240);
   FeatureCount n;
   ASSERT_EQ(extract_canny(weak.view(), {0, 0, 20, 12}, 300, out, n), Status::kOk);  // low = 150 <= 160 < 300 = high
   EXPECT_EQ(n.written, 0u) << "a weak edge with no strong neighbour is not an edge";
-  host::GrayImage mixed = weak;
+  app::GrayImage mixed = weak;
   for (std::uint32_t x = 10; x < 20; ++x) mixed.at(x, 6) = 220;  // one row makes a strong edge there
   ASSERT_EQ(extract_canny(mixed.view(), {0, 0, 20, 12}, 300, out, n), Status::kOk);
   bool strong_row = false, neighbour_row = false, far_row = false;

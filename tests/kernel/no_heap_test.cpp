@@ -13,7 +13,7 @@
 
 #include "gabarit/dense_voter.hpp"
 #include "gabarit/features.hpp"
-#include "gabarit/host/image_io.hpp"
+#include "gabarit/app/image_io.hpp"
 #include "gabarit/tracker.hpp"
 #include "gabarit/depth_by_intensity.hpp"
 #include "gabarit/tracking_session.hpp"
@@ -89,7 +89,7 @@ int main() {
   const auto bytes = testing::build(testing::point_model(pts), "-4:4:9", "-4:4:9", "-4:4:3");
   TableView table;
   if (TableView::open(bytes, table) != Status::kOk) return 2;
-  host::GrayImage frame(64, 64);
+  app::GrayImage frame(64, 64);
   for (const auto& p : pts) frame.at(static_cast<std::uint32_t>(32 + p.x), static_cast<std::uint32_t>(32 + p.y)) = 255;
   std::vector<RoiPoint> features(tracker_feature_capacity(table));
   std::vector<VoteCounter> counters(voter_counter_count(table.cell_count()));
@@ -101,7 +101,7 @@ int main() {
   const TrackerScratch scratch{features, counters, mask};
   const TrackerScratch dense{features, counters, mask, masks, dense_scratch};
   const ImageView view = frame.view();
-  const host::GrayImage blank(64, 64);  // allocated here, before any check
+  const app::GrayImage blank(64, 64);  // allocated here, before any check
   const ImageWindow window{0, 0, 64, 64};
 
   // Positive control: the interposer must see a plain allocation.

@@ -6,13 +6,13 @@
 #include <vector>
 
 #include "gabarit/deterministic_math.hpp"
-#include "gabarit/host/image_io.hpp"
+#include "gabarit/app/image_io.hpp"
 #include "test_tables.hpp"
 
 namespace gabarit {
 namespace {
 
-using host::GrayImage;
+using app::GrayImage;
 using testing::build;
 using testing::point_model;
 
@@ -131,7 +131,7 @@ TEST(MapFeatures, MatchesPrepareFrameForAWindowIndependentDetector) {
   const auto pts = testing::random_points(rng, 40, 12);
   const auto bytes = build(point_model(pts), "-3:3:7", "-3:3:7", "-1.5:1.5:3");
   const TableView t = testing::open_table(bytes);
-  host::GrayImage image(180, 150);
+  app::GrayImage image(180, 150);
   for (auto& v : image.pixels) v = rng.bernoulli(0.15) ? 255 : 0;
   const Detector binary{table_format::DetectorKind::kBinary, 0};
   const ImageWindow big{-20, -30, 230, 210};  // the whole image and beyond

@@ -10,14 +10,14 @@
 #include <cstring>
 #include <vector>
 
-#include "gabarit/host/image_io.hpp"
+#include "gabarit/app/image_io.hpp"
 #include "gabarit/refinement.hpp"
 #include "test_tables.hpp"
 
 namespace gabarit {
 namespace {
 
-using host::GrayImage;
+using app::GrayImage;
 using testing::build;
 using testing::point_model;
 

@@ -1,6 +1,6 @@
 // The cross-target test vectors: reproducible, replayed exactly on the host,
 // and a replay that differs in any field is reported with its frame and field.
-#include "gabarit/platform/test_vectors.hpp"
+#include "gabarit/app/test_vectors.hpp"
 
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -55,7 +55,7 @@ class TestVectors : public ::testing::Test {
     EXPECT_EQ(TableView::open({reinterpret_cast<const std::byte*>(aligned.data()), table_bytes.size()}, table), Status::kOk);
     vectors::VectorSet set;
     GABARIT_TRY(vectors::open_vectors(file, set));
-    host::TrackerBuffers buffers(table, host::VoterChoice::kCsr);
+    app::TrackerBuffers buffers(table, app::VoterChoice::kCsr);
     return vectors::check_vectors(table, set, buffers.scratch(), report);
   }
 

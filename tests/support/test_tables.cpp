@@ -56,8 +56,8 @@ void reseal(std::vector<std::byte>& table) {
   store_le<std::uint32_t>(table.data() + table_format::offset::kCrc32, table_checksum(table));
 }
 
-host::GrayImage draw_points(const std::vector<host::Point>& pts, float x, float y, float theta_deg, std::uint32_t size) {
-  host::GrayImage img(size, size);
+app::GrayImage draw_points(const std::vector<host::Point>& pts, float x, float y, float theta_deg, std::uint32_t size) {
+  app::GrayImage img(size, size);
   const SinCos sc = sin_cos_deg(theta_deg);
   for (const host::Point& p : pts) {
     const auto px = round_to_int(x + sc.cos * static_cast<float>(p.x) - sc.sin * static_cast<float>(p.y));

@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "gabarit/host/image_io.hpp"
+#include "gabarit/app/image_io.hpp"
 #include "gabarit/host/model.hpp"
 #include "gabarit/host/rng.hpp"
 #include "gabarit/host/table_builder.hpp"
@@ -30,7 +30,7 @@ TableView open_table(std::span<const std::byte> bytes);
 
 // A binary frame of size x size with `pts` (relative to the reference point)
 // rotated by theta_deg and placed at (x, y), the tracker's geometry.
-host::GrayImage draw_points(const std::vector<host::Point>& pts, float x, float y, float theta_deg, std::uint32_t size);
+app::GrayImage draw_points(const std::vector<host::Point>& pts, float x, float y, float theta_deg, std::uint32_t size);
 
 // track_step's scratch for one table, sized by the kernel's formulas (CSR voter).
 struct TrackerTestScratch {

@@ -2,7 +2,7 @@
 
 #include <gtest/gtest.h>
 
-#include "gabarit/host/error.hpp"
+#include "gabarit/app/error.hpp"
 #include "gabarit/host/rng.hpp"
 
 namespace gabarit::host {
@@ -39,8 +39,8 @@ TEST(Decimation, IsDeterministicPerSeedAndKeepsAllAtOne) {
   EXPECT_NE(decimate(overlap, 0.3, 11), decimate(overlap, 0.3, 12));
   const auto all = decimate(overlap, 1.0, 11);
   EXPECT_EQ(std::count(all.begin(), all.end(), true), static_cast<long>(overlap.size()));
-  EXPECT_THROW(decimate(overlap, 0.0, 1), Error);
-  EXPECT_THROW(decimate(overlap, 1.5, 1), Error);
+  EXPECT_THROW(decimate(overlap, 0.0, 1), app::Error);
+  EXPECT_THROW(decimate(overlap, 1.5, 1), app::Error);
 }
 
 }  // namespace

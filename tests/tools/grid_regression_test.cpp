@@ -11,7 +11,7 @@
 #include <sstream>
 
 #include "experiments.hpp"
-#include "gabarit/host/error.hpp"
+#include "gabarit/app/error.hpp"
 #include "gabarit/host/thesis_shapes.hpp"
 
 namespace gabarit::bench {
@@ -21,7 +21,7 @@ TEST(ThesisGrid, WrongFramesAreNoWorseThanTheBaseline) {
   std::vector<Shape> shapes = {make_shape("curve", host::thesis_curve())};
   try {
     shapes.push_back(make_shape("watch", host::watch_shape()));
-  } catch (const host::Error& e) {
+  } catch (const app::Error& e) {
     GTEST_SKIP() << "watch photograph unavailable (" << e.what() << "); tools/scripts/setup-debian.sh installs it";
   }
   std::ifstream in(GABARIT_GRID_BASELINE);

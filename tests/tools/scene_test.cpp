@@ -10,7 +10,7 @@
 #include <string>
 
 #include "gabarit/host/evaluation.hpp"
-#include "gabarit/host/image_io.hpp"
+#include "gabarit/app/image_io.hpp"
 #include "gabarit/host/scene_synth.hpp"
 
 namespace gabarit::host {
@@ -49,14 +49,14 @@ TEST(Scene, IsDeterministicWithTruthOcclusionAndADistinctFocusStack) {
   EXPECT_LE(max_step, o.max_speed_px * std::sqrt(2.0) + 1e-3);
   EXPECT_LE(max_turn, o.max_turn_deg + 1e-3);
   // No two depths look alike.
-  const GrayImage d0 = read_pgm((dir / "a" / "model_00.pgm").string());
-  const GrayImage d1 = read_pgm((dir / "a" / "model_01.pgm").string());
-  const GrayImage d2 = read_pgm((dir / "a" / "model_02.pgm").string());
+  const app::GrayImage d0 = app::read_pgm((dir / "a" / "model_00.pgm").string());
+  const app::GrayImage d1 = app::read_pgm((dir / "a" / "model_01.pgm").string());
+  const app::GrayImage d2 = app::read_pgm((dir / "a" / "model_02.pgm").string());
   EXPECT_NE(d0.pixels, d1.pixels);
   EXPECT_NE(d1.pixels, d2.pixels);
   EXPECT_NE(d0.pixels, d2.pixels);
-  auto frames = open_frames((dir / "a" / "frames.y4m").string());
-  GrayImage frame;
+  auto frames = app::open_frames((dir / "a" / "frames.y4m").string());
+  app::GrayImage frame;
   int n = 0;
   while (frames->next(frame)) ++n;
   EXPECT_EQ(n, 30);

@@ -6,8 +6,8 @@
 #include <filesystem>
 #include <set>
 
-#include "gabarit/host/error.hpp"
-#include "gabarit/host/mapped_file.hpp"
+#include "gabarit/app/error.hpp"
+#include "gabarit/app/mapped_file.hpp"
 
 namespace gabarit::host {
 namespace {
@@ -42,8 +42,8 @@ TEST(Synth, SequencesAreDeterministicAndMoveWithinTheBound) {
   o.height = 140;
   const auto a = write_synthetic_sequence(o, temp_dir("gabarit_synth_a").string());
   const auto b = write_synthetic_sequence(o, temp_dir("gabarit_synth_b").string());
-  EXPECT_EQ(read_file((temp_dir("gabarit_synth_a") / "frames.y4m").string()),
-            read_file((temp_dir("gabarit_synth_b") / "frames.y4m").string()));
+  EXPECT_EQ(app::read_file((temp_dir("gabarit_synth_a") / "frames.y4m").string()),
+            app::read_file((temp_dir("gabarit_synth_b") / "frames.y4m").string()));
   ASSERT_EQ(a.size(), 40u);
   for (std::size_t i = 1; i < a.size(); ++i) {
     EXPECT_LE(std::abs(a[i].x - a[i - 1].x), 4);
@@ -60,7 +60,7 @@ TEST(Synth, NoiseFlipsPixelsAtTheRequestedRate) {
   o.width = o.height = 200;
   for (double p : {0.0, 0.1, 0.5}) {
     o.noise = p;
-    const GrayImage img = render_frame(o, 100, 100, 1234);
+    const app::GrayImage img = render_frame(o, 100, 100, 1234);
     std::size_t lit = 0;
     for (auto v : img.pixels) lit += v != 0;
     EXPECT_NEAR(static_cast<double>(lit) / static_cast<double>(img.pixels.size()), p, 0.01) << p;
@@ -71,7 +71,7 @@ TEST(Synth, RejectsShapesThatDoNotFit) {
   SynthOptions o;
   o.shape = {{-100, 0}, {100, 0}};
   o.width = o.height = 64;
-  EXPECT_THROW(write_synthetic_sequence(o, temp_dir("gabarit_synth_c").string()), Error);
+  EXPECT_THROW(write_synthetic_sequence(o, temp_dir("gabarit_synth_c").string()), app::Error);
 }
 
 }  // namespace

@@ -4,8 +4,8 @@
 
 #include <filesystem>
 
-#include "gabarit/host/error.hpp"
-#include "gabarit/host/image_io.hpp"
+#include "gabarit/app/error.hpp"
+#include "gabarit/app/image_io.hpp"
 #include "gabarit/host/synth.hpp"
 #include "gabarit/table_format.hpp"
 #include "test_tables.hpp"
@@ -86,10 +86,10 @@ TEST(TableBuilder, FocusStackCellsCarryTheirDepth) {
 
 TEST(TableBuilder, RejectsSpacesTooLargeForTheFormat) {
   const auto m = point_model({{0, 0}});
-  EXPECT_THROW(build(m, "0:4095:4096", "0:4096:4097"), host::Error);  // more than 2^24 cells
-  EXPECT_THROW(build(m, "0:1:1", "0:0:1"), host::Error);              // parse: one cell needs MIN == MAX
-  EXPECT_THROW(build(m, "1:0:2", "0:0:1"), host::Error);
-  EXPECT_THROW(build(m, "0:1", "0:0:1"), host::Error);
+  EXPECT_THROW(build(m, "0:4095:4096", "0:4096:4097"), app::Error);  // more than 2^24 cells
+  EXPECT_THROW(build(m, "0:1:1", "0:0:1"), app::Error);              // parse: one cell needs MIN == MAX
+  EXPECT_THROW(build(m, "1:0:2", "0:0:1"), app::Error);
+  EXPECT_THROW(build(m, "0:1", "0:0:1"), app::Error);
 }
 
 }  // namespace

@@ -25,10 +25,10 @@ host::Accuracy track_synthetic(double noise, double keep, std::uint64_t seed, st
   const auto truth = host::write_synthetic_sequence(o, dir.string());
   const auto bytes = testing::build(testing::point_model(o.shape), "-5:5:11", "-5:5:11", "0:0:1", keep, seed);
   const TableView table = testing::open_table(bytes);
-  auto frames_in = host::open_frames((dir / "frames.y4m").string());
+  auto frames_in = app::open_frames((dir / "frames.y4m").string());
   std::vector<host::PoseSample> poses, gt;
   host::run_tracking(table, *frames_in, Pose{static_cast<float>(truth[0].x), static_cast<float>(truth[0].y), 0, 0}, std::nullopt,
-                     [&](const host::TrackRow& r) { poses.push_back({r.frame, r.step.pose.x, r.step.pose.y, 0, 0, true}); });
+                     [&](const app::TrackRow& r) { poses.push_back({r.frame, r.step.pose.x, r.step.pose.y, 0, 0, true}); });
   for (const auto& t : truth) gt.push_back({t.frame, double(t.x), double(t.y), 0, 0, true});
   std::filesystem::remove_all(dir);
   return host::evaluate(poses, gt);

@@ -26,7 +26,7 @@
 
 #include "experiments.hpp"
 #include "microscope.hpp"
-#include "gabarit/host/error.hpp"
+#include "gabarit/app/error.hpp"
 #include "gabarit/host/thesis_shapes.hpp"
 #include "svg_plot.hpp"
 
@@ -117,7 +117,7 @@ std::vector<TimingRow> time_methods(const Shape& shape, std::size_t frames, int 
   for (double keep : {0.5, 0.1, 0.01}) {
     methods.push_back(hough(shape_table(shape, keep, 1), "(e) bounded Hough, " + pct(keep) + " of references"));
   }
-  methods.push_back(hough(full, "(d') bounded Hough, full stencils, CSR voter", host::VoterChoice::kCsr));
+  methods.push_back(hough(full, "(d') bounded Hough, full stencils, CSR voter", app::VoterChoice::kCsr));
   methods.push_back(std::make_unique<CvMatch>(shape, cv::TM_CCORR, "OpenCV matchTemplate TM_CCORR"));
   methods.push_back(std::make_unique<CvMatch>(shape, cv::TM_CCOEFF_NORMED, "OpenCV matchTemplate TM_CCOEFF_NORMED"));
   std::vector<double> best(methods.size(), 1e300);
@@ -221,7 +221,7 @@ int run(const Options& o) {
     for (double keep : keeps) {
       const auto bytes = shape_table(s, keep, 1);
       TableView t;
-      if (TableView::open(bytes, t) != Status::kOk) throw host::Error("bench: invalid table");
+      if (TableView::open(bytes, t) != Status::kOk) throw app::Error("bench: invalid table");
       const Robustness r = stencil_robustness(t);
       robust_csv << s.name << ',' << keep << ',' << t.reference_count() << ',' << r.mean << ',' << r.min << '\n';
       robust_rows[s.name].push_back("| " + pct(keep) + " | " + std::to_string(t.reference_count()) + " | " + std::to_string(t.size_bytes()) +
@@ -387,14 +387,14 @@ int main(int argc, char** argv) {
     for (int i = 1; i < argc; ++i) {
       const std::string a = argv[i];
       const auto value = [&]() -> std::string {
-        if (i + 1 >= argc) throw gabarit::host::Error(a + " needs a value");
+        if (i + 1 >= argc) throw gabarit::app::Error(a + " needs a value");
         return argv[++i];
       };
       const auto count = [&](std::size_t lo, std::size_t hi) {
         const std::string v = value();
         char* end = nullptr;
         const unsigned long long n = std::strtoull(v.c_str(), &end, 10);
-        if (v.empty() || *end || n < lo || n > hi) throw gabarit::host::Error(a + " '" + v + "': want " + std::to_string(lo) + ".." + std::to_string(hi));
+        if (v.empty() || *end || n < lo || n > hi) throw gabarit::app::Error(a + " '" + v + "': want " + std::to_string(lo) + ".." + std::to_string(hi));
         return static_cast<std::size_t>(n);
       };
       if (a == "--help" || a == "-h") {

@@ -7,7 +7,7 @@
 #include <thread>
 
 #include "gabarit/deterministic_math.hpp"
-#include "gabarit/host/error.hpp"
+#include "gabarit/app/error.hpp"
 #include "gabarit/host/rng.hpp"
 #include "gabarit/host/state_space.hpp"
 #include "gabarit/host/table_builder.hpp"
@@ -98,7 +98,7 @@ class ShapeXcorr final : public Estimator {
 class ExhaustiveStencil final : public Estimator {
  public:
   ExhaustiveStencil(const std::vector<std::byte>& bytes, std::size_t stride) : bytes_(bytes) {
-    if (TableView::open(bytes_, table_) != Status::kOk) throw host::Error("bench: invalid table");
+    if (TableView::open(bytes_, table_) != Status::kOk) throw app::Error("bench: invalid table");
     // Transpose the table: cell -> image offsets of its stencil pixels.
     begin_.assign(table_.cell_count() + 1, 0);
     for (std::uint32_t i = 0; i < table_.reference_count(); ++i) ++begin_[table_.reference(i) + 1];
@@ -136,7 +136,7 @@ class ExhaustiveStencil final : public Estimator {
 
 class Hough final : public Estimator {
  public:
-  Hough(std::vector<std::byte> bytes, std::string name, host::VoterChoice voter)
+  Hough(std::vector<std::byte> bytes, std::string name, app::VoterChoice voter)
       : bytes_(std::move(bytes)), name_(std::move(name)), table_(open(bytes_)), buffers_(table_, voter) {}
   std::string name() const override { return name_; }
   Point estimate(const Trial& t) override {
@@ -144,7 +144,7 @@ class Hough final : public Estimator {
     const Pose previous{static_cast<float>(t.previous.x), static_cast<float>(t.previous.y), 0, 0};
     if (track_step(table_, {table_format::DetectorKind::kBinary, 0}, t.frame.view(), previous, buffers_.scratch(), r) !=
         Status::kOk) {
-      throw host::Error("bench: track_step failed");
+      throw app::Error("bench: track_step failed");
     }
     return {round_to_int(r.pose.x), round_to_int(r.pose.y)};
   }
@@ -152,66 +152,23 @@ class Hough final : public Estimator {
  private:
   static TableView open(const std::vector<std::byte>& bytes) {
     TableView t;
-    if (TableView::open(bytes, t) != Status::kOk) throw host::Error("bench: invalid table");
+    if (TableView::open(bytes, t) != Status::kOk) throw app::Error("bench: invalid table");
     return t;
   }
   std::vector<std::byte> bytes_;
   std::string name_;
   TableView table_;
-  host::TrackerBuffers buffers_;
+  app::TrackerBuffers buffers_;
 };
 
 }  // namespace
-
-Shape make_shape(const std::string& name, std::vector<Point> points) {
-  host::SynthOptions o;
-  o.shape = points;
-  o.max_step = kMaxStep;
-  host::fit_image_to_shape(o);
-  return {name, std::move(points), o.width, o.height};
-}
-
-std::vector<Trial> make_trials(const Shape& shape, double noise, std::size_t count, std::uint64_t seed) {
-  host::SynthOptions o;
-  o.shape = shape.points;
-  o.width = shape.width;
-  o.height = shape.height;
-  o.noise = noise;
-  host::Rng rng(seed);
-  std::vector<Trial> trials;
-  trials.reserve(count);
-  for (std::size_t i = 0; i < count; ++i) {
-    Trial t;
-    // fit_image_to_shape leaves >= 16 px of room: previous within +-8 of the
-    // centre plus a step of +-4 keeps the shape and the +-5 window inside.
-    t.previous = {static_cast<std::int32_t>(shape.width / 2) + rng.uniform_int(-8, 8),
-                  static_cast<std::int32_t>(shape.height / 2) + rng.uniform_int(-8, 8)};
-    t.truth = {t.previous.x + rng.uniform_int(-kMaxStep, kMaxStep), t.previous.y + rng.uniform_int(-kMaxStep, kMaxStep)};
-    t.frame = host::render_frame(o, t.truth.x, t.truth.y, rng.next_u64());
-    trials.push_back(std::move(t));
-  }
-  return trials;
-}
-
-std::vector<std::byte> shape_table(const Shape& shape, double keep, std::uint64_t seed) {
-  host::ModelStack model;
-  model.depths.push_back(shape.points);
-  model.detector.kind = table_format::DetectorKind::kBinary;
-  host::BuildOptions o;
-  o.space.x = host::parse_axis(kCellAxis, "x");
-  o.space.y = host::parse_axis(kCellAxis, "y");
-  o.space.theta = host::parse_axis("0:0:1", "theta");
-  o.keep = keep;
-  o.seed = seed;
-  return host::build_table(model, o);
-}
 
 std::unique_ptr<Estimator> rect_xcorr(const Shape& shape) { return std::make_unique<RectXcorr>(shape); }
 std::unique_ptr<Estimator> shape_xcorr(const Shape& shape) { return std::make_unique<ShapeXcorr>(shape); }
 std::unique_ptr<Estimator> exhaustive_stencil(const std::vector<std::byte>& table, std::size_t stride) {
   return std::make_unique<ExhaustiveStencil>(table, stride);
 }
-std::unique_ptr<Estimator> hough(std::vector<std::byte> table, const std::string& name, host::VoterChoice voter) {
+std::unique_ptr<Estimator> hough(std::vector<std::byte> table, const std::string& name, app::VoterChoice voter) {
   return std::make_unique<Hough>(std::move(table), name, voter);
 }
 

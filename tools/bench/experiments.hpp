@@ -17,38 +17,27 @@
 #include <string>
 #include <vector>
 
-#include "gabarit/host/image_io.hpp"
+#include "gabarit/app/image_io.hpp"
 #include "gabarit/host/model.hpp"
 #include "gabarit/host/synth.hpp"
 #include "gabarit/host/tracking_run.hpp"
+#include "gabarit/host/voter_trials.hpp"
 #include "gabarit/table_view.hpp"
 #include "gabarit/tracker.hpp"
 
 namespace gabarit::bench {
 
-using host::GrayImage;
+using app::GrayImage;
 using host::Point;
 
-inline constexpr std::int32_t kMaxStep = 4;    // motion per axis and frame
-inline constexpr const char* kCellAxis = "-5:5:11";  // 1-pixel cells over +-5 px
-
-struct Shape {
-  std::string name;
-  std::vector<Point> points;
-  std::uint32_t width = 0, height = 0;  // frame size
-};
-Shape make_shape(const std::string& name, std::vector<Point> points);
-
-struct Trial {
-  GrayImage frame;
-  Point previous;
-  Point truth;
-};
-// `count` trials at noise rate `noise`, deterministic in `seed`.
-std::vector<Trial> make_trials(const Shape& shape, double noise, std::size_t count, std::uint64_t seed);
-
-// A table for the shape (binary detector, 1-pixel cells over +-5 px).
-std::vector<std::byte> shape_table(const Shape& shape, double keep, std::uint64_t seed);
+// The trials and tables of the protocol above (gabarit/host/voter_trials.hpp).
+using host::kCellAxis;
+using host::kMaxStep;
+using host::make_shape;
+using host::make_trials;
+using host::Shape;
+using host::shape_table;
+using host::Trial;
 
 class Estimator {
  public:
@@ -68,7 +57,7 @@ std::unique_ptr<Estimator> exhaustive_stencil(const std::vector<std::byte>& tabl
 // (d), (e) the bounded Hough transform (the kernel's track_step) with the
 //     given table (full or decimated stencils) and voter.
 std::unique_ptr<Estimator> hough(std::vector<std::byte> table, const std::string& name,
-                                 host::VoterChoice voter = host::VoterChoice::kAuto);
+                                 app::VoterChoice voter = app::VoterChoice::kAuto);
 
 struct GridRow {
   std::string shape;

@@ -17,9 +17,9 @@
 #include <thread>
 
 #include "gabarit/features.hpp"
-#include "gabarit/host/error.hpp"
+#include "gabarit/app/error.hpp"
 #include "gabarit/host/evaluation.hpp"
-#include "gabarit/host/image_io.hpp"
+#include "gabarit/app/image_io.hpp"
 #include "gabarit/host/model.hpp"
 #include "gabarit/host/parallel_voter.hpp"
 #include "gabarit/host/rng.hpp"
@@ -44,17 +44,17 @@ std::string fmt(double v, int digits = 1) {
 }
 
 // The sequence held in memory, so no method is timed reading files.
-class MemoryFrames final : public host::FrameSource {
+class MemoryFrames final : public app::FrameSource {
  public:
-  explicit MemoryFrames(const std::vector<host::GrayImage>& f) : frames_(f) {}
-  bool next(host::GrayImage& out) override {
+  explicit MemoryFrames(const std::vector<app::GrayImage>& f) : frames_(f) {}
+  bool next(app::GrayImage& out) override {
     if (at_ >= frames_.size()) return false;
     out = frames_[at_++];
     return true;
   }
 
  private:
-  const std::vector<host::GrayImage>& frames_;
+  const std::vector<app::GrayImage>& frames_;
   std::size_t at_ = 0;
 };
 
@@ -79,12 +79,12 @@ struct Run {
 // new pose.
 class NccBank {
  public:
-  NccBank(const std::vector<host::GrayImage>& models, int range, double step_deg, int steps)
+  NccBank(const std::vector<app::GrayImage>& models, int range, double step_deg, int steps)
       : range_(range), step_(step_deg), steps_(steps) {
     for (const auto& m : models) models_.emplace_back(static_cast<int>(m.height), static_cast<int>(m.width), CV_8U,
                                                       const_cast<std::uint8_t*>(m.pixels.data()));
   }
-  Pose track(const host::GrayImage& frame, const Pose& previous) {
+  Pose track(const app::GrayImage& frame, const Pose& previous) {
     const cv::Mat image(static_cast<int>(frame.height), static_cast<int>(frame.width), CV_8U, const_cast<std::uint8_t*>(frame.pixels.data()));
     double best = -2;
     Pose out = previous;
@@ -144,10 +144,10 @@ int run_microscope(const std::string& dir, bool quick) {
   so.frames = quick ? 140 : 240;
   const std::string seq = (fs::path(dir) / "scene").string();
   const host::SceneSummary scene = host::write_scene_sequence(so, seq);
-  std::vector<host::GrayImage> frames;
+  std::vector<app::GrayImage> frames;
   {
-    auto src = host::open_frames((fs::path(seq) / "frames.y4m").string());
-    host::GrayImage f;
+    auto src = app::open_frames((fs::path(seq) / "frames.y4m").string());
+    app::GrayImage f;
     while (src->next(f)) frames.push_back(f);
   }
   const auto truth = host::read_pose_csv((fs::path(seq) / "gt.csv").string());
@@ -158,12 +158,12 @@ int run_microscope(const std::string& dir, bool quick) {
 
   // 2. Tables: the fine table of the tracker, timed.
   std::vector<std::string> model_paths;
-  std::vector<host::GrayImage> model_images;
+  std::vector<app::GrayImage> model_images;
   for (int d = 0; d < so.depths; ++d) {
     char name[32];
     std::snprintf(name, sizeof name, "model_%02d.pgm", d);
     model_paths.push_back((fs::path(seq) / name).string());
-    model_images.push_back(host::read_pgm(model_paths.back()));
+    model_images.push_back(app::read_pgm(model_paths.back()));
   }
   const host::ModelStack model = host::model_from_images(model_paths, {});
   host::BuildOptions bo;
@@ -174,7 +174,7 @@ int run_microscope(const std::string& dir, bool quick) {
   const std::vector<std::byte> table_bytes = host::build_table(model, bo);
   const double build_fine_ms = micros_since(t0) / 1000;
   TableView table;
-  if (TableView::open(table_bytes, table) != Status::kOk) throw host::Error("microscope: fine table invalid");
+  if (TableView::open(table_bytes, table) != Status::kOk) throw app::Error("microscope: fine table invalid");
   md << "Fine table (gradient-rows detector unless said): x, y -4..4 px in 1-px cells, theta -1.5..1.5 deg in 0.5-deg cells, " << so.depths << " depths = "
      << table.cell_count() << " cells, " << table.reference_count() << " references, " << table_bytes.size() << " bytes, "
      << model.depths[0].size() << " model features at depth 0 (gradient detector, threshold " << model.detector.threshold
@@ -193,7 +193,7 @@ int run_microscope(const std::string& dir, bool quick) {
     Run r{name, {}, 0, {}};
     MemoryFrames src(frames);
     double total = 0;
-    host::run_tracking(with, src, init, options, [&](const host::TrackRow& row) {
+    host::run_tracking(with, src, init, options, [&](const app::TrackRow& row) {
       r.poses.push_back({row.frame, row.step.pose.x, row.step.pose.y, row.step.pose.theta_deg, row.step.pose.depth, true});
       total += row.micros;
       r.micros.push_back(row.micros);
@@ -211,7 +211,7 @@ int run_microscope(const std::string& dir, bool quick) {
   canny_options.canny = true;
   const std::vector<std::byte> canny_bytes = host::build_table(host::model_from_images(model_paths, canny_options), bo);
   TableView canny_table;
-  if (TableView::open(canny_bytes, canny_table) != Status::kOk) throw host::Error("microscope: Canny table invalid");
+  if (TableView::open(canny_bytes, canny_table) != Status::kOk) throw app::Error("microscope: Canny table invalid");
   track("the same, Canny variant detector", SessionOptions{}, canny_table);
   // Depth by intensity at the tracked pose (depth_by_intensity.hpp), and the
   // recovery search spread over lost frames (SessionOptions::search_budget).
@@ -359,10 +359,10 @@ int run_microscope(const std::string& dir, bool quick) {
       other.seed = seed;
       const std::string other_dir = (fs::path(dir) / ("scene-seed" + std::to_string(seed))).string();
       host::write_scene_sequence(other, other_dir);
-      std::vector<host::GrayImage> other_frames;
+      std::vector<app::GrayImage> other_frames;
       {
-        auto src = host::open_frames((fs::path(other_dir) / "frames.y4m").string());
-        host::GrayImage f;
+        auto src = app::open_frames((fs::path(other_dir) / "frames.y4m").string());
+        app::GrayImage f;
         while (src->next(f)) other_frames.push_back(f);
       }
       const auto other_truth = host::read_pose_csv((fs::path(other_dir) / "gt.csv").string());
@@ -372,11 +372,11 @@ int run_microscope(const std::string& dir, bool quick) {
         char name[32];
         std::snprintf(name, sizeof name, "model_%02d.pgm", d);
         paths.push_back((fs::path(other_dir) / name).string());
-        options.focus_stack.push_back(host::read_pgm(paths.back()));
+        options.focus_stack.push_back(app::read_pgm(paths.back()));
       }
       const std::vector<std::byte> bytes = host::build_table(host::model_from_images(paths, {}), bo);
       TableView other_table;
-      if (TableView::open(bytes, other_table) != Status::kOk) throw host::Error("microscope: table for seed " + std::to_string(seed) + " invalid");
+      if (TableView::open(bytes, other_table) != Status::kOk) throw app::Error("microscope: table for seed " + std::to_string(seed) + " invalid");
       const Pose start{static_cast<float>(other_truth[0].x), static_cast<float>(other_truth[0].y),
                        static_cast<float>(other_truth[0].theta_deg), static_cast<std::uint16_t>(other_truth[0].depth)};
       for (const bool cheaper : {false, true}) {
@@ -384,7 +384,7 @@ int run_microscope(const std::string& dir, bool quick) {
         Run r{"seed " + std::to_string(seed), {}, 0, {}};
         std::size_t lost = 0;
         MemoryFrames src(other_frames);
-        host::run_tracking(other_table, src, start, options, [&](const host::TrackRow& row) {
+        host::run_tracking(other_table, src, start, options, [&](const app::TrackRow& row) {
           r.poses.push_back({row.frame, row.step.pose.x, row.step.pose.y, row.step.pose.theta_deg, row.step.pose.depth, true});
           r.micros.push_back(row.micros);
           r.mean_us += row.micros / static_cast<double>(other_frames.size());
@@ -430,10 +430,10 @@ int run_microscope(const std::string& dir, bool quick) {
           std::fill(b.begin(), b.end(), 0);
           VoteTally ta, tb;
           auto t = Clock::now();
-          if (accumulate_votes(table, feats, a, ta) != Status::kOk) throw host::Error("voting failed");
+          if (accumulate_votes(table, feats, a, ta) != Status::kOk) throw app::Error("voting failed");
           t1 += micros_since(t);
           t = Clock::now();
-          if (voter.accumulate(table, feats, b, tb) != Status::kOk) throw host::Error("parallel voting failed");
+          if (voter.accumulate(table, feats, b, tb) != Status::kOk) throw app::Error("parallel voting failed");
           t2 += micros_since(t);
           identical = identical && a == b && ta.votes == tb.votes;
         }
@@ -448,11 +448,11 @@ int run_microscope(const std::string& dir, bool quick) {
     // The whole plain loop (features, vote, pose) with the vote on 1 and 2 threads.
     const auto loop_us = [&](unsigned threads) {
       host::TrackingOptions o;
-      o.voter = host::VoterChoice::kCsr;
+      o.voter = app::VoterChoice::kCsr;
       o.threads = threads;
       MemoryFrames src(frames);
       double total = 0;
-      host::run_tracking(table, src, init, o, [&](const host::TrackRow& row) { total += row.micros; });
+      host::run_tracking(table, src, init, o, [&](const app::TrackRow& row) { total += row.micros; });
       return total / static_cast<double>(frames.size());
     };
     double loop_one = 1e30, loop_two = 1e30;
@@ -520,11 +520,11 @@ int run_microscope(const std::string& dir, bool quick) {
       cb.translations = policy;
       const auto bytes = host::build_table(curve, cb);
       TableView t;
-      if (TableView::open(bytes, t) != Status::kOk) throw host::Error("microscope: curve table invalid");
-      auto src = host::open_frames((fs::path(bin_dir) / "frames.y4m").string());
+      if (TableView::open(bytes, t) != Status::kOk) throw app::Error("microscope: curve table invalid");
+      auto src = app::open_frames((fs::path(bin_dir) / "frames.y4m").string());
       std::vector<host::PoseSample> poses;
       host::run_tracking(t, *src, Pose{static_cast<float>(gt[0].x), static_cast<float>(gt[0].y), 0, 0}, std::nullopt,
-                         [&](const host::TrackRow& row) { poses.push_back({row.frame, row.step.pose.x, row.step.pose.y, 0, 0, true}); });
+                         [&](const app::TrackRow& row) { poses.push_back({row.frame, row.step.pose.x, row.step.pose.y, 0, 0, true}); });
       const host::Accuracy a = host::evaluate(poses, bin_truth);
       md << "| " << (policy == host::TranslationPolicy::kEnclosing ? "smallest enclosing integer range" : "inside, else closest (default)")
          << " | " << t.reference_count() << " | " << fmt(100.0 * static_cast<double>(a.within_1px) / static_cast<double>(a.frames))
@@ -570,7 +570,7 @@ int run_microscope(const std::string& dir, bool quick) {
         const std::vector<std::byte> bytes = host::build_table(m, b);
         const double build_ms = micros_since(tb) / 1000;
         TableView t;
-        if (TableView::open(bytes, t) != Status::kOk) throw host::Error("complexity: table invalid");
+        if (TableView::open(bytes, t) != Status::kOk) throw app::Error("complexity: table invalid");
         host::SynthOptions syn;
         syn.shape = curve;
         syn.frames = 30;
@@ -578,7 +578,7 @@ int run_microscope(const std::string& dir, bool quick) {
         syn.seed = 4;
         host::fit_image_to_shape(syn);
         host::Rng rng(syn.seed);
-        std::vector<host::GrayImage> seq;
+        std::vector<app::GrayImage> seq;
         std::int32_t x = static_cast<std::int32_t>(syn.width / 2), y = static_cast<std::int32_t>(syn.height / 2);
         const Pose start{static_cast<float>(x), static_cast<float>(y), 0, 0};
         for (std::uint32_t f = 0; f < syn.frames; ++f) {
@@ -588,7 +588,7 @@ int run_microscope(const std::string& dir, bool quick) {
         }
         MemoryFrames src(seq);
         double total = 0;
-        host::run_tracking(t, src, start, std::nullopt, [&](const host::TrackRow& row) { total += row.micros; });
+        host::run_tracking(t, src, start, std::nullopt, [&](const app::TrackRow& row) { total += row.micros; });
         md << "| " << st.name << " | " << curve.size() << " | " << fmt(build_ms) << " | " << t.reference_count() << " | "
            << fmt(static_cast<double>(bytes.size()) / 1e6, 2) << " | " << fmt(total / static_cast<double>(seq.size())) << " |\n";
       }

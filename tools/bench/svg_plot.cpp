@@ -5,7 +5,7 @@
 #include <fstream>
 #include <sstream>
 
-#include "gabarit/host/error.hpp"
+#include "gabarit/app/error.hpp"
 
 namespace gabarit::bench::svg {
 namespace {
@@ -135,7 +135,7 @@ std::string bars(const std::string& title, const std::string& value_title, const
 void write(const std::string& path, const std::string& svg) {
   std::ofstream f(path);
   f << svg;
-  if (!f.flush()) throw host::Error(path + ": write failed");
+  if (!f.flush()) throw app::Error(path + ": write failed");
 }
 
 }  // namespace gabarit::bench::svg

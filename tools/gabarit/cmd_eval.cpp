@@ -1,14 +1,14 @@
 // gabarit eval
 #include <iostream>
 
-#include "args.hpp"
+#include "gabarit/app/args.hpp"
 #include "commands.hpp"
 #include "gabarit/host/evaluation.hpp"
 
 namespace gabarit::cli {
 
 int eval(const std::vector<std::string>& argv) {
-  Args args("eval", "--poses POSES.csv --gt gt.csv [--require-exact]",
+  app::Args args("eval", "--poses POSES.csv --gt gt.csv [--require-exact]",
             "Compares tracked poses with ground truth and prints accuracy as JSON: frames on the exact pixel,\n"
             "within 1 and 2 px, mean and max error, and the wrongly tracked frames.",
             {{"--poses", "POSES.csv", "output of gabarit track", false, true},

@@ -1,7 +1,7 @@
 // gabarit synth
 #include <cstdio>
 
-#include "args.hpp"
+#include "gabarit/app/args.hpp"
 #include "commands.hpp"
 #include "gabarit/host/scene_synth.hpp"
 #include "gabarit/host/synth.hpp"
@@ -10,10 +10,10 @@
 namespace gabarit::cli {
 namespace {
 
-int synth_scene(const Args& args) {
-  if (args.get("--scene") != "microscope") throw UsageError("--scene '" + args.get("--scene") + "': want microscope");
+int synth_scene(const app::Args& args) {
+  if (args.get("--scene") != "microscope") throw app::UsageError("--scene '" + args.get("--scene") + "': want microscope");
   for (const char* shape_only : {"--points", "--max-step", "--noise"})
-    if (args.has(shape_only)) throw UsageError(std::string(shape_only) + " applies to --shape");
+    if (args.has(shape_only)) throw app::UsageError(std::string(shape_only) + " applies to --shape");
   host::SceneOptions o;
   o.seed = static_cast<std::uint64_t>(args.integer("--seed", 1, 0, INT64_MAX));
   o.frames = static_cast<std::uint32_t>(args.integer("--frames", o.frames, 1, 100000));
@@ -22,16 +22,14 @@ int synth_scene(const Args& args) {
     unsigned start = 0, count = 0;
     char tail = 0;
     if (std::sscanf(args.get("--occlusion").c_str(), "%u:%u%c", &start, &count, &tail) != 2)
-      throw UsageError("--occlusion '" + args.get("--occlusion") + "': want START:FRAMES");
+      throw app::UsageError("--occlusion '" + args.get("--occlusion") + "': want START:FRAMES");
     o.occlusion_start = start;
     o.occlusion_frames = count;
   }
   if (args.has("--size")) {
-    unsigned w = 0, h = 0;
-    char tail = 0;
-    if (std::sscanf(args.get("--size").c_str(), "%ux%u%c", &w, &h, &tail) != 2) throw UsageError("--size: want WxH");
-    o.width = w;
-    o.height = h;
+    const app::FrameSize size = app::parse_size(args.get("--size"), "--size", 8, 8192);
+    o.width = size.width;
+    o.height = size.height;
   }
   const auto summary = host::write_scene_sequence(o, args.get("-o"));
   std::fprintf(stderr, "%s: %u frames %ux%u (%u visible), object radius %u px, %u depths, seed %llu\n", args.get("-o").c_str(),
@@ -43,7 +41,7 @@ int synth_scene(const Args& args) {
 }  // namespace
 
 int synth(const std::vector<std::string>& argv) {
-  Args args("synth", "(--shape SRC --frames N --max-step PX --noise P | --scene microscope [--depths N]) --seed S -o DIR",
+  app::Args args("synth", "(--shape SRC --frames N --max-step PX --noise P | --scene microscope [--depths N]) --seed S -o DIR",
             "--shape: a synthetic sequence of the thesis (section 6.2): a point shape translated over an empty\n"
             "image by a random displacement within +-PX per axis and frame, with salt-and-pepper noise of rate P.\n"
             "Outputs DIR/frames.y4m (Cmono), DIR/gt.csv (frame,x,y,theta_deg,depth,visible), DIR/model.csv\n"
@@ -65,28 +63,24 @@ int synth(const std::vector<std::string>& argv) {
              {"--size", "WxH", "image size (default: 256x256, larger if the shape needs it)"},
              {"-o", "DIR", "output directory", false, true}});
   if (!args.parse(argv)) return 0;
-  if (args.has("--scene") == args.has("--shape")) throw UsageError("give one of --shape and --scene");
+  if (args.has("--scene") == args.has("--shape")) throw app::UsageError("give one of --shape and --scene");
   if (args.has("--scene")) return synth_scene(args);
   for (const char* scene_only : {"--depths", "--occlusion"})
-    if (args.has(scene_only)) throw UsageError(std::string(scene_only) + " applies to --scene");
+    if (args.has(scene_only)) throw app::UsageError(std::string(scene_only) + " applies to --scene");
   host::SynthOptions o;
   o.seed = static_cast<std::uint64_t>(args.integer("--seed", 1, 0, INT64_MAX));
   const std::string shape = args.get("--shape");
   const bool counted = shape == "random" || shape.rfind("photo:", 0) == 0;
-  if (args.has("--points") && !counted) throw UsageError("--points applies to --shape random and photo:");
+  if (args.has("--points") && !counted) throw app::UsageError("--points applies to --shape random and photo:");
   o.shape = host::resolve_shape(shape, static_cast<std::size_t>(args.integer("--points", shape == "random" ? 194 : 2800, 8, 20000)),
                                 o.seed);
   o.frames = static_cast<std::uint32_t>(args.integer("--frames", 100, 1, 1000000));
   o.max_step = static_cast<std::int32_t>(args.integer("--max-step", 4, 0, 1000));
   o.noise = args.number("--noise", 0.0, 0.0, 1.0);
   if (args.has("--size")) {
-    unsigned w = 0, h = 0;
-    char tail = 0;
-    if (std::sscanf(args.get("--size").c_str(), "%ux%u%c", &w, &h, &tail) != 2 || w < 8 || h < 8 || w > 8192 || h > 8192) {
-      throw UsageError("--size '" + args.get("--size") + "': want WxH with 8 <= W,H <= 8192");
-    }
-    o.width = w;
-    o.height = h;
+    const app::FrameSize size = app::parse_size(args.get("--size"), "--size", 8, 8192);
+    o.width = size.width;
+    o.height = size.height;
   } else {
     host::fit_image_to_shape(o);
   }

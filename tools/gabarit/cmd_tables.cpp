@@ -5,10 +5,10 @@
 #include <cstdio>
 #include <iostream>
 
-#include "args.hpp"
+#include "gabarit/app/args.hpp"
 #include "commands.hpp"
 #include "gabarit/host/hdl_export.hpp"
-#include "gabarit/host/mapped_file.hpp"
+#include "gabarit/app/mapped_file.hpp"
 #include "gabarit/host/model.hpp"
 #include "gabarit/host/table_builder.hpp"
 #include "gabarit/host/table_inspect.hpp"
@@ -19,20 +19,20 @@ namespace gabarit::cli {
 namespace {
 
 // A malformed axis is bad usage (exit 2), not a failed build.
-Axis axis_argument(const Args& args, const std::string& name, const std::string& fallback) {
+Axis axis_argument(const app::Args& args, const std::string& name, const std::string& fallback) {
   try {
     return host::parse_axis(args.get_or(name, fallback), name);
-  } catch (const UsageError&) {
+  } catch (const app::UsageError&) {
     throw;
-  } catch (const host::Error& e) {
-    throw UsageError(e.what());
+  } catch (const app::Error& e) {
+    throw app::UsageError(e.what());
   }
 }
 
 }  // namespace
 
 int tables_build(const std::vector<std::string>& argv) {
-  Args args("tables build", "(--model IMG.pgm [IMG.pgm ...] | --model-points PTS.csv) --x MIN:MAX:CELLS --y MIN:MAX:CELLS [options] -o OUT",
+  app::Args args("tables build", "(--model IMG.pgm [IMG.pgm ...] | --model-points PTS.csv) --x MIN:MAX:CELLS --y MIN:MAX:CELLS [options] -o OUT",
             "Builds a stencil look-up table (docs/table-format.md) for a model over a bounded motion space.\n"
             "Several --model images form a focus stack ordered by depth index. Same inputs and seed give\n"
             "byte-identical output.",
@@ -58,26 +58,26 @@ int tables_build(const std::vector<std::string>& argv) {
   // `--model a.pgm b.pgm c.pgm`: images after the first are positionals.
   std::vector<std::string> images = args.all("--model");
   if (!args.positionals().empty() && images.empty()) {
-    throw UsageError("unexpected argument '" + args.positionals()[0] + "' (model images follow --model)");
+    throw app::UsageError("unexpected argument '" + args.positionals()[0] + "' (model images follow --model)");
   }
   images.insert(images.end(), args.positionals().begin(), args.positionals().end());
   const bool has_images = args.has("--model");
-  if (has_images == args.has("--model-points")) throw UsageError("give either --model or --model-points");
+  if (has_images == args.has("--model-points")) throw app::UsageError("give either --model or --model-points");
 
   host::ModelStack model;
   if (has_images) {
     host::ImageModelOptions mo;
     mo.binary = args.has("--binary");
     const std::string detector = args.get_or("--detector", "gradient-rows");
-    if (detector != "gradient-rows" && detector != "canny") throw UsageError("--detector '" + detector + "': want gradient-rows or canny");
-    if (mo.binary && args.has("--detector")) throw UsageError("--detector has no meaning with --binary");
+    if (detector != "gradient-rows" && detector != "canny") throw app::UsageError("--detector '" + detector + "': want gradient-rows or canny");
+    if (mo.binary && args.has("--detector")) throw app::UsageError("--detector has no meaning with --binary");
     mo.canny = detector == "canny";
     mo.threshold = static_cast<int>(args.integer("--threshold", -1, 1, kMaxGradientMagnitude));
-    if (mo.binary && args.has("--threshold")) throw UsageError("--threshold has no meaning with --binary");
+    if (mo.binary && args.has("--threshold")) throw app::UsageError("--threshold has no meaning with --binary");
     if (args.has("--ref")) {
-      const auto ref = parse_number_list(args.get("--ref"), "--ref", 2, 2);
+      const auto ref = app::parse_number_list(args.get("--ref"), "--ref", 2, 2);
       if (ref[0] != std::floor(ref[0]) || ref[1] != std::floor(ref[1]) || std::fabs(ref[0]) > 16384 || std::fabs(ref[1]) > 16384) {
-        throw UsageError("--ref: X,Y must be integer pixel positions");
+        throw app::UsageError("--ref: X,Y must be integer pixel positions");
       }
       mo.has_ref = true;
       mo.ref_x = static_cast<std::int32_t>(ref[0]);
@@ -85,17 +85,17 @@ int tables_build(const std::vector<std::string>& argv) {
     }
     model = host::model_from_images(images, mo);
   } else {
-    if (args.has("--ref")) throw UsageError("--ref applies to --model images; point CSVs are already relative to it");
+    if (args.has("--ref")) throw app::UsageError("--ref applies to --model images; point CSVs are already relative to it");
     model.depths.push_back(host::read_points_csv(args.get("--model-points")));
     if (args.has("--binary")) {
       model.detector.kind = table_format::DetectorKind::kBinary;
-      if (args.has("--threshold")) throw UsageError("--threshold has no meaning with --binary");
+      if (args.has("--threshold")) throw app::UsageError("--threshold has no meaning with --binary");
     } else if (args.has("--threshold")) {
       model.detector.kind = args.get_or("--detector", "gradient-rows") == "canny" ? table_format::DetectorKind::kCanny
                                                                                : table_format::DetectorKind::kGradientRows;
       model.detector.threshold = static_cast<std::uint16_t>(args.integer("--threshold", 1, 1, kMaxGradientMagnitude));
     } else {
-      throw UsageError("--model-points: say which detector frames need: --binary or --threshold N");
+      throw app::UsageError("--model-points: say which detector frames need: --binary or --threshold N");
     }
   }
 
@@ -104,17 +104,17 @@ int tables_build(const std::vector<std::string>& argv) {
   bo.space.y = axis_argument(args, "--y", "");
   bo.space.theta = axis_argument(args, "--theta", "0:0:1");
   bo.keep = args.number("--keep", 1.0, 0.0, 1.0);
-  if (!(bo.keep > 0)) throw UsageError("--keep must be above 0");
+  if (!(bo.keep > 0)) throw app::UsageError("--keep must be above 0");
   bo.seed = static_cast<std::uint64_t>(args.integer("--seed", 1, 0, INT64_MAX));
   if (const std::string t = args.get_or("--translations", "inside"); t == "enclosing") {
     bo.translations = host::TranslationPolicy::kEnclosing;
   } else if (t != "inside") {
-    throw UsageError("--translations '" + t + "': want inside or enclosing");
+    throw app::UsageError("--translations '" + t + "': want inside or enclosing");
   }
   if (const std::string d = args.get_or("--decimation", "overlap"); d == "uniform") {
     bo.decimation = host::Decimation::kUniform;
   } else if (d != "overlap") {
-    throw UsageError("--decimation '" + d + "': want overlap or uniform");
+    throw app::UsageError("--decimation '" + d + "': want overlap or uniform");
   }
   if (isatty(STDERR_FILENO)) {
     bo.progress = [](std::size_t done, std::size_t total) {
@@ -125,9 +125,9 @@ int tables_build(const std::vector<std::string>& argv) {
   const std::vector<std::byte> bytes = host::build_table(model, bo);
   TableView view;
   if (const Status s = TableView::open(bytes, view); s != Status::kOk) {
-    throw host::Error(std::string("internal error: built table does not validate: ") + status_name(s));
+    throw app::Error(std::string("internal error: built table does not validate: ") + status_name(s));
   }
-  host::write_file(args.get("-o"), bytes);
+  app::write_file(args.get("-o"), bytes);
   std::fprintf(stderr, "%s: %zu bytes, %u cells, %u references (%u-byte), ROI %ux%u\n", args.get("-o").c_str(), bytes.size(),
                view.cell_count(), view.reference_count(), unsigned{view.reference_bytes()}, unsigned{view.roi_width()},
                unsigned{view.roi_height()});
@@ -135,16 +135,13 @@ int tables_build(const std::vector<std::string>& argv) {
 }
 
 int tables_inspect(const std::vector<std::string>& argv) {
-  Args args("tables inspect", "TABLE", "Validates a table and prints it as JSON: sizes, space, refs-per-pixel histogram, stencil sizes.",
+  app::Args args("tables inspect", "TABLE", "Validates a table and prints it as JSON: sizes, space, refs-per-pixel histogram, stencil sizes.",
             {}, "TABLE");
   if (!args.parse(argv)) return 0;
-  if (args.positionals().size() != 1) throw UsageError("give exactly one TABLE");
+  if (args.positionals().size() != 1) throw app::UsageError("give exactly one TABLE");
   const std::string& path = args.positionals()[0];
-  host::MappedFile file(path);
-  TableView view;
-  if (const Status s = TableView::open(file.bytes(), view); s != Status::kOk) {
-    throw host::Error(path + ": not a valid table: " + status_name(s));
-  }
+  const app::TableFile file(path);
+  const TableView& view = file.view();
   std::cout << host::inspect_json(view);
   return 0;
 }
@@ -154,7 +151,7 @@ int tables_inspect(const std::vector<std::string>& argv) {
 namespace gabarit::cli {
 
 int tables_export_hdl(const std::vector<std::string>& argv) {
-  Args args("tables export-hdl", "TABLE --out DIR [--lanes N]",
+  app::Args args("tables export-hdl", "TABLE --out DIR [--lanes N]",
             "Writes the hardware voter's memory images ($readmemh: offsets.mem, refs_<k>.mem, sizes_<k>.mem) and\n"
             "a SystemVerilog package with the table's sizes (gabarit_table_pkg.sv) for hdl/rtl/gbt_voter_table.sv.",
             {{"--out", "DIR", "output directory", false, true},
@@ -166,15 +163,12 @@ int tables_export_hdl(const std::vector<std::string>& argv) {
                                     "lane's cells); a smaller one narrows the offsets words"}},
             "TABLE");
   if (!args.parse(argv)) return 0;
-  if (args.positionals().size() != 1) throw UsageError("give exactly one TABLE");
+  if (args.positionals().size() != 1) throw app::UsageError("give exactly one TABLE");
   const auto lanes = static_cast<std::uint32_t>(args.integer("--lanes", 1, 1, 8));
-  if (lanes != 1 && lanes != 2 && lanes != 4 && lanes != 8) throw UsageError("--lanes must be 1, 2, 4 or 8");
+  if (lanes != 1 && lanes != 2 && lanes != 4 && lanes != 8) throw app::UsageError("--lanes must be 1, 2, 4 or 8");
   const std::string& path = args.positionals()[0];
-  host::MappedFile file(path);
-  TableView view;
-  if (const Status s = TableView::open(file.bytes(), view); s != Status::kOk) {
-    throw host::Error(path + ": not a valid table: " + status_name(s));
-  }
+  const app::TableFile file(path);
+  const TableView& view = file.view();
   host::HdlCapacities cap;
   cap.cells = static_cast<std::uint32_t>(args.integer("--cells", 0, 1, table_format::kMaxCells));
   cap.pixels = static_cast<std::uint32_t>(args.integer("--pixels", 0, 1, table_format::kMaxRoiPixels));

@@ -5,17 +5,17 @@
 #include <iostream>
 #include <optional>
 
-#include "args.hpp"
+#include "gabarit/app/args.hpp"
 #include "commands.hpp"
-#include "gabarit/host/error.hpp"
-#include "gabarit/host/image_io.hpp"
-#include "gabarit/host/mapped_file.hpp"
+#include "gabarit/app/error.hpp"
+#include "gabarit/app/image_io.hpp"
+#include "gabarit/app/mapped_file.hpp"
 #include "gabarit/host/tracking_run.hpp"
 
 namespace gabarit::cli {
 
 int track(const std::vector<std::string>& argv) {
-  Args args("track", "--table T --frames SEQ --init X,Y[,THETA[,DEPTH]] [--binary] [-o POSES.csv] [--stats STATS.json]",
+  app::Args args("track", "--table T --frames SEQ --init X,Y[,THETA[,DEPTH]] [--binary] [-o POSES.csv] [--stats STATS.json]",
             "Tracks the table's model through a sequence (a Y4M file, Cmono or 4:2:0, luma used; or a directory of\n"
             "PGM frames), streamed frame by frame. Writes frame,x,y,theta_deg,depth,votes,score,status per frame\n"
             "(to stdout without -o).",
@@ -41,13 +41,10 @@ int track(const std::vector<std::string>& argv) {
              {"-o", "POSES.csv", "pose output (default stdout)"},
              {"--stats", "STATS.json", "per-frame timing and vote statistics"}});
   if (!args.parse(argv)) return 0;
-  host::MappedFile file(args.get("--table"));
-  TableView table;
-  if (const Status s = TableView::open(file.bytes(), table); s != Status::kOk) {
-    throw host::Error(args.get("--table") + ": not a valid table: " + status_name(s));
-  }
-  const Pose pose = parse_init_pose(args.get("--init"), table, "--init");
-  const host::VoterChoice voter = parse_voter(args.get_or("--voter", "auto"), "--voter");
+  const app::TableFile table_file(args.get("--table"));
+  const TableView& table = table_file.view();
+  const Pose pose = app::parse_init_pose(args.get("--init"), table, "--init");
+  const app::VoterChoice voter = app::parse_voter(args.get_or("--voter", "auto"), "--voter");
   host::TrackingOptions options;
   options.voter = voter;
   if (args.has("--binary")) options.detector = Detector{table_format::DetectorKind::kBinary, 0};
@@ -59,27 +56,24 @@ int track(const std::vector<std::string>& argv) {
   options.session.screen_stride = static_cast<std::uint32_t>(args.integer("--screen-stride", 2, 1, 16));
   options.threads = static_cast<unsigned>(args.integer("--threads", 1, 1, 64));
   if (options.threads > 1 && (options.session.motion_filter || options.session.refine || options.session.recover))
-    throw UsageError("--threads applies to the plain loop, without --motion-filter, --refine, --recover or --coarse");
+    throw app::UsageError("--threads applies to the plain loop, without --motion-filter, --refine, --recover or --coarse");
   if (args.has("--focus-stack")) {
-    if (options.threads > 1) throw UsageError("--focus-stack needs the session loop; drop --threads");
+    if (options.threads > 1) throw app::UsageError("--focus-stack needs the session loop; drop --threads");
     std::string list = args.get("--focus-stack");
     for (std::size_t start = 0; start <= list.size();) {
       const std::size_t comma = std::min(list.find(',', start), list.size());
       const std::string path = list.substr(start, comma - start);
-      if (path.empty()) throw UsageError("--focus-stack: an empty image path");
-      options.focus_stack.push_back(host::read_pgm(path));
+      if (path.empty()) throw app::UsageError("--focus-stack: an empty image path");
+      options.focus_stack.push_back(app::read_pgm(path));
       start = comma + 1;
     }
   }
-  if (options.threads > 1 && args.has("--voter")) throw UsageError("--threads votes with its own (multi-threaded CSR) voter; drop --voter");
-  std::optional<host::MappedFile> coarse_file;
-  TableView coarse;
+  if (options.threads > 1 && args.has("--voter")) throw app::UsageError("--threads votes with its own (multi-threaded CSR) voter; drop --voter");
+  std::optional<app::TableFile> coarse_file;
   if (args.has("--coarse")) {
-    coarse_file.emplace(args.get("--coarse"));
-    if (const Status s = TableView::open(coarse_file->bytes(), coarse); s != Status::kOk)
-      throw host::Error(args.get("--coarse") + ": not a valid table: " + status_name(s));
+    const TableView& coarse = coarse_file.emplace(args.get("--coarse")).view();
     if (coarse.depth_count() != table.depth_count())
-      throw UsageError("--coarse: the coarse table has " + std::to_string(coarse.depth_count()) + " depths, the table " +
+      throw app::UsageError("--coarse: the coarse table has " + std::to_string(coarse.depth_count()) + " depths, the table " +
                        std::to_string(table.depth_count()));
     options.coarse = &coarse;
   }
@@ -88,17 +82,17 @@ int track(const std::vector<std::string>& argv) {
   std::ostream* out = &std::cout;
   if (args.has("-o")) {
     file_out.open(args.get("-o"));
-    if (!file_out) throw host::Error(args.get("-o") + ": cannot create");
+    if (!file_out) throw app::Error(args.get("-o") + ": cannot create");
     out = &file_out;
   }
-  *out << host::kPoseCsvHeader << '\n';
-  auto frames = host::open_frames(args.get("--frames"));
+  *out << app::kPoseCsvHeader << '\n';
+  auto frames = app::open_frames(args.get("--frames"));
   std::vector<double> micros;
   double features = 0, votes = 0;
   std::uint64_t dropped = 0;
   std::size_t lost = 0, uncertain = 0;
-  host::run_tracking(table, *frames, pose, options, [&](const host::TrackRow& row) {
-    *out << host::pose_csv_row(row) << '\n';
+  host::run_tracking(table, *frames, pose, options, [&](const app::TrackRow& row) {
+    *out << app::pose_csv_row(row) << '\n';
     micros.push_back(row.micros);
     features += row.step.features;
     votes += static_cast<double>(row.step.votes);
@@ -107,18 +101,18 @@ int track(const std::vector<std::string>& argv) {
     uncertain += row.step.state == TrackState::kUncertain;
   });
   out->flush();
-  if (!*out) throw host::Error("pose output: write failed");
+  if (!*out) throw app::Error("pose output: write failed");
   const host::TimingSummary t = host::summarise_timing(micros);
   const double n = t.frames ? static_cast<double>(t.frames) : 1.0;
   if (args.has("--stats")) {
     std::ofstream stats(args.get("--stats"));
-    if (!stats) throw host::Error(args.get("--stats") + ": cannot create");
+    if (!stats) throw app::Error(args.get("--stats") + ": cannot create");
     stats << "{\n  \"frames\": " << t.frames << ",\n  \"per_frame_us\": {\"mean\": " << t.mean << ", \"p50\": " << t.p50
           << ", \"p99\": " << t.p99 << ", \"max\": " << t.max << "},\n  \"features_per_frame\": " << features / n
           << ",\n  \"votes_per_frame\": " << votes / n << ",\n  \"features_dropped\": " << dropped
           << ",\n  \"lost_frames\": " << lost << ",\n  \"uncertain_frames\": " << uncertain
           << ",\n  \"table_bytes\": " << table.size_bytes() << ",\n  \"cells\": " << table.cell_count() << "\n}\n";
-    if (!stats.flush()) throw host::Error(args.get("--stats") + ": write failed");
+    if (!stats.flush()) throw app::Error(args.get("--stats") + ": write failed");
   }
   std::fprintf(stderr, "tracked %zu frames: %.1f us/frame mean (p50 %.1f, p99 %.1f, max %.1f), %.0f features and %.0f votes per frame, %zu lost\n",
                t.frames, t.mean, t.p50, t.p99, t.max, features / n, votes / n, lost);

@@ -1,14 +1,14 @@
 // gabarit vectors
 #include <cstdio>
 
-#include "args.hpp"
+#include "gabarit/app/args.hpp"
 #include "commands.hpp"
 #include "gabarit/host/test_vector_scene.hpp"
 
 namespace gabarit::cli {
 
 int vectors(const std::vector<std::string>& argv) {
-  Args args("vectors", "--out DIR [options]",
+  app::Args args("vectors", "--out DIR [options]",
             "Writes the cross-target test vectors: DIR/table.gbt (a 4-DOF table: x, y +-6 px in 2-px cells,\n"
             "theta +-3 deg in 2-deg cells, every focus-stack depth) and DIR/vectors.gbv (frames plus the host's\n"
             "tracking results, docs/file-formats.md). Every target replays them and must match bit for bit.\n"

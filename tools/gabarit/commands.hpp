@@ -1,5 +1,5 @@
 // The gabarit CLI's subcommands; each takes the arguments after its name and
-// returns the process exit code (errors are thrown as host::Error/UsageError).
+// returns the process exit code (errors are thrown as app::Error/UsageError).
 #pragma once
 
 #include <string>

@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-#include "args.hpp"
+#include "gabarit/app/args.hpp"
 #include "commands.hpp"
 
 namespace {
@@ -55,21 +55,21 @@ int main(int argc, char** argv) {
     args.erase(args.begin());
     if (command == "bench") return exec_bench(argv);
     if (command == "tables") {
-      if (args.empty()) throw gabarit::cli::UsageError("tables: want 'build', 'inspect' or 'export-hdl'");
+      if (args.empty()) throw gabarit::app::UsageError("tables: want 'build', 'inspect' or 'export-hdl'");
       const std::string sub = args[0];
       args.erase(args.begin());
       command += " " + sub;
       if (sub == "build") return gabarit::cli::tables_build(args);
       if (sub == "inspect") return gabarit::cli::tables_inspect(args);
       if (sub == "export-hdl") return gabarit::cli::tables_export_hdl(args);
-      throw gabarit::cli::UsageError("tables: unknown subcommand '" + sub + "' (want build, inspect or export-hdl)");
+      throw gabarit::app::UsageError("tables: unknown subcommand '" + sub + "' (want build, inspect or export-hdl)");
     }
     if (command == "synth") return gabarit::cli::synth(args);
     if (command == "track") return gabarit::cli::track(args);
     if (command == "eval") return gabarit::cli::eval(args);
     if (command == "vectors") return gabarit::cli::vectors(args);
-    throw gabarit::cli::UsageError("unknown command '" + command + "'");
-  } catch (const gabarit::cli::UsageError& e) {
+    throw gabarit::app::UsageError("unknown command '" + command + "'");
+  } catch (const gabarit::app::UsageError& e) {
     std::fprintf(stderr, "gabarit %s: %s\n(see gabarit %s --help)\n", command.c_str(), e.what(),
                  command.empty() ? "" : command.c_str());
     return 2;

@@ -6,7 +6,8 @@
 // the frame (rotated by the pose's angle about the model's reference point)
 // and compared by normalised cross-correlation; the best-correlated image is
 // the depth. The frame is sampled bilinearly in 1/256-pixel fixed point and
-// the sums are integers, so every target gets the same answer; every
+// the sums are integers (the final ratio is one float division), so every
+// target gets the same answer; every
 // `step`-th model pixel in each direction is sampled.
 #pragma once
 #include <cstdint>
@@ -14,7 +15,7 @@
 
 #include "gabarit/image_view.hpp"
 #include "gabarit/status.hpp"
-#include "gabarit/tracker.hpp"
+#include "gabarit/pose.hpp"
 
 namespace gabarit {
 
@@ -24,8 +25,15 @@ struct FocusStack {
   std::uint32_t step = 2;             // sample every step-th pixel (>= 1)
 };
 
-// kInvalidArgument for an empty stack, invalid images or images of different
-// sizes, a zero step, more than 65535 depths, or a non-finite pose; `depth` is
+// The stack's images may be at most kMaxStackSide pixels a side, with the
+// reference point within +-kMaxStackSide, and sampled every 1..kMaxStackStep
+// pixels: the sample geometry is 16.16 fixed point in 64 bits.
+inline constexpr std::uint32_t kMaxStackSide = 16384;
+inline constexpr std::uint32_t kMaxStackStep = 256;
+
+// kInvalidArgument for an empty stack, invalid images, images of different
+// sizes or beyond those bounds, a step of 0 or above kMaxStackStep, more than
+// 65535 depths, or a pose outside pose_in_range or |theta| >= 1e5; `depth` is
 // then left unchanged. When fewer than 16 samples fall inside the frame (the
 // object is leaving it) there is nothing to compare: kOk, `depth` unchanged.
 [[nodiscard]] Status depth_by_intensity(const ImageView& frame, const Pose& pose, const FocusStack& stack,

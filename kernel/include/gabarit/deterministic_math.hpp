@@ -9,6 +9,11 @@
 
 namespace gabarit {
 
+// The kernel's one finiteness check: not NaN, not infinite.
+constexpr bool is_finite(float v) noexcept { return v == v && v - v == 0.0f; }
+// -limit < v < limit (false for NaN).
+constexpr bool within_limit(float v, float limit) noexcept { return v > -limit && v < limit; }
+
 // Rounds to the nearest integer, halves away from zero. Precondition: |x| < 2^30.
 constexpr std::int32_t round_to_int(float x) noexcept {
   return static_cast<std::int32_t>(x >= 0.0f ? x + 0.5f : x - 0.5f);

@@ -87,6 +87,52 @@ constexpr std::uint32_t align_up(std::uint32_t n) noexcept {
   return (n + (kSectionAlignment - 1)) & ~(kSectionAlignment - 1);
 }
 
+// The counts that fix a table's layout.
+struct LayoutCounts {
+  std::uint32_t cell_count = 0;
+  std::uint32_t roi_pixels = 0;        // roi_width * roi_height
+  std::uint32_t reference_count = 0;
+  std::uint8_t reference_bytes = 0;    // narrowest_reference_bytes(cell_count)
+  std::uint16_t depth_count = 0;
+  std::uint32_t model_point_count = 0;
+};
+// Where each section starts, and the file's size: the sections follow the
+// header in this order, each 8-byte aligned, with no gaps beyond alignment
+// (docs/table-format.md). The one description of the layout: the reader
+// (TableView::open) checks the header's offsets against it and the writer
+// (the table builder) places the sections by it. Precondition: the counts
+// are within the kMax* limits, which keeps every sum inside 32 bits.
+struct Layout {
+  std::uint32_t cells = 0;          // cell descriptors
+  std::uint32_t pixel_offsets = 0;  // CSR offsets, roi_pixels + 1 x u32
+  std::uint32_t references = 0;     // reference_count x reference_bytes
+  std::uint32_t model_counts = 0;   // depth_count x u32
+  std::uint32_t model_points = 0;   // model_point_count x (i16, i16)
+  std::uint32_t file_bytes = 0;
+};
+constexpr Layout layout_of(const LayoutCounts& n) noexcept {
+  Layout l;
+  l.cells = kHeaderBytes;
+  l.pixel_offsets = align_up(l.cells + n.cell_count * kCellDescriptorBytes);
+  l.references = align_up(l.pixel_offsets + (n.roi_pixels + 1) * 4);
+  l.model_counts = align_up(l.references + n.reference_count * n.reference_bytes);
+  l.model_points = align_up(l.model_counts + std::uint32_t{n.depth_count} * 4);
+  l.file_bytes = align_up(l.model_points + n.model_point_count * kModelPointBytes);
+  return l;
+}
+// The worked example of docs/table-format.md: 3 cells, a 2 x 2 ROI, 5
+// one-byte references, 1 depth, 3 model points.
+static_assert(layout_of({3, 4, 5, 1, 1, 3}).pixel_offsets == 256 && layout_of({3, 4, 5, 1, 1, 3}).references == 280 &&
+                  layout_of({3, 4, 5, 1, 1, 3}).model_counts == 288 && layout_of({3, 4, 5, 1, 1, 3}).model_points == 296 &&
+                  layout_of({3, 4, 5, 1, 1, 3}).file_bytes == 312,
+              "the section offsets of docs/table-format.md's worked example");
+// The largest table the limits allow still fits a 32-bit size.
+static_assert(std::uint64_t{kHeaderBytes} + std::uint64_t{kMaxCells} * kCellDescriptorBytes + (kMaxRoiPixels + 1ull) * 4 +
+                      std::uint64_t{kMaxReferences} * 4 + kMaxDepths * 4ull + std::uint64_t{kMaxModelPoints} * kModelPointBytes +
+                      5 * kSectionAlignment <
+                  (1ull << 32),
+              "every section sum stays inside 32 bits");
+
 constexpr std::uint8_t narrowest_reference_bytes(std::uint32_t cell_count) noexcept {
   return cell_count <= 0x100u ? 1 : (cell_count <= 0x10000u ? 2 : 4);
 }

@@ -14,7 +14,8 @@
 //
 // State. kLost when the best cell has no vote; kUncertain when the runner-up
 // has the same normalised score (the motion is ambiguous); kTracking
-// otherwise. (The motion filter of a later issue refines this.)
+// otherwise. A TrackingSession (tracking_session.hpp) grades it further with
+// the motion filter's confidence.
 #pragma once
 
 #include <cstddef>
@@ -23,19 +24,13 @@
 
 #include "gabarit/features.hpp"
 #include "gabarit/image_view.hpp"
+#include "gabarit/pose.hpp"
 #include "gabarit/roi_point.hpp"
 #include "gabarit/status.hpp"
 #include "gabarit/table_view.hpp"
 #include "gabarit/voter.hpp"
 
 namespace gabarit {
-
-struct Pose {
-  float x = 0.0f;          // image position of the model's reference point, pixels
-  float y = 0.0f;
-  float theta_deg = 0.0f;  // rotation about the reference point, degrees
-  std::uint16_t depth = 0; // focus-stack index
-};
 
 enum class TrackState : std::uint8_t { kTracking = 0, kUncertain = 1, kLost = 2 };
 const char* track_state_name(TrackState state) noexcept;

@@ -35,7 +35,8 @@
 #include <thread>
 #include <vector>
 
-#include "gabarit/host/image_io.hpp"
+#include "gabarit/app/args.hpp"
+#include "gabarit/app/image_io.hpp"
 
 namespace {
 
@@ -97,10 +98,14 @@ std::string option(const std::vector<std::string>& args, const std::string& name
 }
 
 void setup(const std::vector<std::string>& args) {
-  unsigned w = 0, h = 0;
-  if (std::sscanf(option(args, "--size", "").c_str(), "%ux%u", &w, &h) != 2) {
+  std::uint32_t w = 0, h = 0;
+  try {
+    const gabarit::app::FrameSize size = gabarit::app::parse_size(option(args, "--size", ""), "--size", 8, 8192);
+    w = size.width;
+    h = size.height;
+  } catch (const gabarit::app::Error& e) {
     errno = 0;
-    die("--size: want WxH");
+    die(e.what());
   }
   const int cap = open_device(option(args, "--capture", "/dev/video0"));
   const int out = open_device(option(args, "--output", "/dev/video1"));
@@ -138,8 +143,8 @@ void play(const std::vector<std::string>& args) {
     if (p == MAP_FAILED) die("mmap output");
     maps.emplace_back(static_cast<std::uint8_t*>(p), b.length);
   }
-  auto frames = gabarit::host::open_frames(option(args, "--frames", ""));
-  gabarit::host::GrayImage frame;
+  auto frames = gabarit::app::open_frames(option(args, "--frames", ""));
+  gabarit::app::GrayImage frame;
   std::uint32_t count = 0;
   bool streaming = false;
   while (frames->next(frame)) {

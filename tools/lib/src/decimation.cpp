@@ -2,7 +2,7 @@
 
 #include <algorithm>
 
-#include "gabarit/host/error.hpp"
+#include "gabarit/app/error.hpp"
 #include "gabarit/host/rng.hpp"
 
 namespace gabarit::host {
@@ -28,7 +28,7 @@ double decimation_alpha(const std::vector<std::uint32_t>& overlap, double keep) 
 }
 
 std::vector<bool> decimate(const std::vector<std::uint32_t>& overlap, double keep, std::uint64_t seed, Decimation mode) {
-  if (!(keep > 0.0) || keep > 1.0) throw Error("--keep must be in (0, 1]");
+  if (!(keep > 0.0) || keep > 1.0) throw app::Error("--keep must be in (0, 1]");
   std::vector<bool> kept(overlap.size(), true);
   if (keep == 1.0 || overlap.empty()) return kept;
   if (mode == Decimation::kUniform) {

@@ -5,16 +5,16 @@
 #include <map>
 #include <sstream>
 
-#include "gabarit/host/error.hpp"
+#include "gabarit/app/error.hpp"
 
 namespace gabarit::host {
 
 std::vector<PoseSample> read_pose_csv(const std::string& path) {
   std::ifstream in(path);
-  if (!in) throw Error(path + ": cannot open");
+  if (!in) throw app::Error(path + ": cannot open");
   std::string line;
   if (!std::getline(in, line) || line.rfind("frame,x,y,theta_deg,depth", 0) != 0) {
-    throw Error(path + ":1: expected header starting 'frame,x,y,theta_deg,depth'");
+    throw app::Error(path + ":1: expected header starting 'frame,x,y,theta_deg,depth'");
   }
   const bool has_visible = line.find(",visible") != std::string::npos;
   std::vector<PoseSample> out;
@@ -35,7 +35,7 @@ std::vector<PoseSample> read_pose_csv(const std::string& path) {
       if (has_visible && fields.size() >= 6) s.visible = std::stoi(fields[5]) != 0;
       out.push_back(s);
     } catch (const std::exception&) {
-      throw Error(path + ":" + std::to_string(n) + ": malformed row '" + line + "'");
+      throw app::Error(path + ":" + std::to_string(n) + ": malformed row '" + line + "'");
     }
   }
   return out;

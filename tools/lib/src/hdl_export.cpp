@@ -6,7 +6,7 @@
 #include <fstream>
 #include <sstream>
 
-#include "gabarit/host/error.hpp"
+#include "gabarit/app/error.hpp"
 
 namespace gabarit::host {
 
@@ -24,7 +24,7 @@ std::uint32_t HdlLayout::max_range_count() const {
 }
 
 HdlLayout hdl_layout(const TableView& t, std::uint32_t lanes) {
-  if (lanes != 1 && lanes != 2 && lanes != 4 && lanes != 8) throw Error("--lanes must be 1, 2, 4 or 8");
+  if (lanes != 1 && lanes != 2 && lanes != 4 && lanes != 8) throw app::Error("--lanes must be 1, 2, 4 or 8");
   HdlLayout l;
   l.lanes = lanes;
   l.cell_count = t.cell_count();
@@ -45,7 +45,7 @@ HdlLayout hdl_layout(const TableView& t, std::uint32_t lanes) {
   }
   for (std::uint32_t c = 0; c < t.cell_count(); ++c) {
     const std::uint32_t s = t.stencil_size(c);
-    if (s > 0xFFFF) throw Error("stencil of cell " + std::to_string(c) + " has " + std::to_string(s) + " pixels; the hardware voter's size field holds 65535");
+    if (s > 0xFFFF) throw app::Error("stencil of cell " + std::to_string(c) + " has " + std::to_string(s) + " pixels; the hardware voter's size field holds 65535");
     l.sizes[c % lanes][c / lanes] = std::max<std::uint32_t>(1, s);
   }
   return l;
@@ -67,7 +67,7 @@ std::vector<std::uint32_t> hdl_offsets_word(const HdlLayout& l, std::uint32_t pi
   };
   for (std::uint32_t k = 0; k < l.lanes; ++k) {
     const HdlRange& r = l.ranges[pixel][k];
-    if (r.begin >= (1ull << w.offset_bits) || r.count >= (1ull << w.count_bits)) throw Error("range does not fit the voter's widths");
+    if (r.begin >= (1ull << w.offset_bits) || r.count >= (1ull << w.count_bits)) throw app::Error("range does not fit the voter's widths");
     put(k * w.range_bits(), r.count, w.count_bits);
     put(k * w.range_bits() + w.count_bits, r.begin, w.offset_bits);
   }
@@ -79,7 +79,7 @@ namespace {
 void write_mem(const std::string& path, const std::vector<std::vector<std::uint32_t>>& words, std::uint32_t bits,
                const std::string& what) {
   std::ofstream f(path);
-  if (!f) throw Error(path + ": cannot create");
+  if (!f) throw app::Error(path + ": cannot create");
   f << "// " << what << ": " << words.size() << " words of " << bits << " bits ($readmemh)\n";
   const std::uint32_t digits = (bits + 3) / 4;
   for (const auto& w : words) {
@@ -90,7 +90,7 @@ void write_mem(const std::string& path, const std::vector<std::vector<std::uint3
     }
     f << hex << '\n';
   }
-  if (!f.flush()) throw Error(path + ": write failed");
+  if (!f.flush()) throw app::Error(path + ": write failed");
 }
 
 }  // namespace
@@ -101,7 +101,7 @@ std::string write_hdl_export(const HdlLayout& l, const std::string& dir, HdlCapa
   if (cap.refs_per_lane == 0) cap.refs_per_lane = std::max<std::uint32_t>(1, l.max_lane_refs());
   if (l.cell_count > cap.cells || l.ranges.size() > cap.pixels || l.max_lane_refs() > cap.refs_per_lane ||
       (cap.range_count != 0 && l.max_range_count() > cap.range_count)) {
-    throw Error("table (" + std::to_string(l.cell_count) + " cells, " + std::to_string(l.ranges.size()) + " pixels, " +
+    throw app::Error("table (" + std::to_string(l.cell_count) + " cells, " + std::to_string(l.ranges.size()) + " pixels, " +
                 std::to_string(l.max_lane_refs()) + " refs per lane) exceeds the capacities (" + std::to_string(cap.cells) +
                 ", " + std::to_string(cap.pixels) + ", " + std::to_string(cap.refs_per_lane) + ")" +
                 (cap.range_count != 0 ? " or a pixel's range exceeds " + std::to_string(cap.range_count) + " references" : ""));
@@ -138,7 +138,7 @@ std::string write_hdl_export(const HdlLayout& l, const std::string& dir, HdlCapa
       << "  localparam int unsigned RangeCountWidth = " << w.count_bits << ";\n"
       << "  localparam int unsigned MemoryBits = " << memory_bits << ";  // all voter memories\n"
       << "endpackage\n\n`default_nettype wire\n";
-  if (!pkg.flush()) throw Error(dir + "/gabarit_table_pkg.sv: write failed");
+  if (!pkg.flush()) throw app::Error(dir + "/gabarit_table_pkg.sv: write failed");
   std::ostringstream s;
   s << dir << ": " << l.lanes << " lane(s), " << l.cell_count << " cells, ROI " << l.roi_width << "x" << l.roi_height << ", "
     << refs_per_lane << " refs per lane, " << memory_bits << " bits of memory (" << memory_bits / 8192.0 << " KiB)";

@@ -1,6 +1,6 @@
 #include "gabarit/host/parallel_voter.hpp"
 
-#include "gabarit/host/error.hpp"
+#include "gabarit/app/error.hpp"
 
 namespace gabarit::host {
 namespace {
@@ -24,7 +24,7 @@ void relax(int& spins) {
 
 ParallelVoter::ParallelVoter(unsigned threads, Split split)
     : threads_(threads == 0 ? 1 : threads), split_(split), private_(threads_), votes_(threads_, 0), status_(threads_, Status::kOk) {
-  if (threads == 0 || threads > 256) throw Error("parallel voter: threads must be in 1..256");
+  if (threads == 0 || threads > 256) throw app::Error("parallel voter: threads must be in 1..256");
   for (unsigned i = 1; i < threads_; ++i) workers_.emplace_back([this, i] { work(i); });
 }
 

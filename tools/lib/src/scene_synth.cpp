@@ -6,8 +6,8 @@
 #include <filesystem>
 #include <fstream>
 
-#include "gabarit/host/error.hpp"
-#include "gabarit/host/image_io.hpp"
+#include "gabarit/app/error.hpp"
+#include "gabarit/app/image_io.hpp"
 #include "gabarit/host/rng.hpp"
 #include "gabarit/host/thesis_shapes.hpp"
 
@@ -34,7 +34,7 @@ struct Plane {
   }
 };
 
-Plane from_photo(const GrayImage& g) {
+Plane from_photo(const app::GrayImage& g) {
   Plane p(static_cast<int>(g.width), static_cast<int>(g.height));
   for (std::size_t i = 0; i < p.v.size(); ++i) p.v[i] = g.pixels[i];
   return p;
@@ -130,22 +130,22 @@ void composite(Plane& frame, const Layer& object, double x, double y, double the
 }
 
 void write_plane_pgm(const std::string& path, const Plane& p) {
-  GrayImage g(static_cast<std::uint32_t>(p.w), static_cast<std::uint32_t>(p.h));
+  app::GrayImage g(static_cast<std::uint32_t>(p.w), static_cast<std::uint32_t>(p.h));
   for (std::size_t i = 0; i < p.v.size(); ++i) g.pixels[i] = static_cast<std::uint8_t>(std::clamp(std::lround(p.v[i]), 0L, 255L));
-  write_pgm(path, g);
+  app::write_pgm(path, g);
 }
 
 }  // namespace
 
 SceneSummary write_scene_sequence(const SceneOptions& o, const std::string& dir) {
-  if (o.frames < 1 || o.frames > 100000) throw Error("scene: frames must be in 1..100000");
+  if (o.frames < 1 || o.frames > 100000) throw app::Error("scene: frames must be in 1..100000");
   if (o.width < 3 * kPatch || o.height < 2 * kPatch + 20 || o.width > 4096 || o.height > 4096)
-    throw Error("scene: size must be at least " + std::to_string(3 * kPatch) + "x" + std::to_string(2 * kPatch + 20));
-  if (o.depths < 1 || o.depths > 32) throw Error("scene: depths must be in 1..32");
+    throw app::Error("scene: size must be at least " + std::to_string(3 * kPatch) + "x" + std::to_string(2 * kPatch + 20));
+  if (o.depths < 1 || o.depths > 32) throw app::Error("scene: depths must be in 1..32");
   std::filesystem::create_directories(dir);
 
   // The photographs, converted at run time.
-  const Plane camera = gaussian_blur(from_photo(read_pgm(debian_photo_pgm("camera"))), 0.0);
+  const Plane camera = gaussian_blur(from_photo(app::read_pgm(debian_photo_pgm("camera"))), 0.0);
   Plane grey(kPatch, kPatch), alpha(kPatch, kPatch);
   for (int y = 0; y < kPatch; ++y)  // 2x box downscale of the square around the cameraman's head and camera
     for (int x = 0; x < kPatch; ++x) {
@@ -153,8 +153,8 @@ SceneSummary write_scene_sequence(const SceneOptions& o, const std::string& dir)
       grey.at(x, y) = 0.25 * (camera.at(sx, sy) + camera.at(sx + 1, sy) + camera.at(sx, sy + 1) + camera.at(sx + 1, sy + 1));
       alpha.at(x, y) = std::clamp(outline_radius(x - kHalf, y - kHalf) + 0.5 - std::hypot(x - kHalf, y - kHalf), 0.0, 1.0);
     }
-  const Plane gravel = from_photo(read_pgm(debian_photo_pgm("gravel")));
-  const Plane brick = from_photo(read_pgm(debian_photo_pgm("brick")));
+  const Plane gravel = from_photo(app::read_pgm(debian_photo_pgm("gravel")));
+  const Plane brick = from_photo(app::read_pgm(debian_photo_pgm("brick")));
   Plane background(static_cast<int>(o.width), static_cast<int>(o.height));
   for (int y = 0; y < background.h; ++y)
     for (int x = 0; x < background.w; ++x) background.at(x, y) = gravel.at(x % gravel.w, y % gravel.h);
@@ -188,7 +188,7 @@ SceneSummary write_scene_sequence(const SceneOptions& o, const std::string& dir)
     return p;
   };
 
-  Y4mWriter y4m((std::filesystem::path(dir) / "frames.y4m").string(), o.width, o.height);
+  app::Y4mWriter y4m((std::filesystem::path(dir) / "frames.y4m").string(), o.width, o.height);
   std::ofstream gt(std::filesystem::path(dir) / "gt.csv");
   gt << "frame,x,y,theta_deg,depth,visible\n";
   SceneSummary summary;
@@ -222,7 +222,7 @@ SceneSummary write_scene_sequence(const SceneOptions& o, const std::string& dir)
           if (ox + x >= 0 && oy + y >= 0 && ox + x < frame.w && oy + y < frame.h)
             frame.at(ox + x, oy + y) = gain * brick.at((x + 200) % brick.w, (y + 100) % brick.h);
     }
-    GrayImage out(o.width, o.height);
+    app::GrayImage out(o.width, o.height);
     for (std::size_t i = 0; i < out.pixels.size(); ++i) {
       // Box-Muller from the project's generator: the same noise on every machine.
       const double u1 = std::max(rng.next_unit(), 1e-12), u2 = rng.next_unit();
@@ -236,7 +236,7 @@ SceneSummary write_scene_sequence(const SceneOptions& o, const std::string& dir)
     summary.visible_frames += occluded ? 0 : 1;
   }
   y4m.close();
-  if (!gt.flush()) throw Error("scene: cannot write gt.csv");
+  if (!gt.flush()) throw app::Error("scene: cannot write gt.csv");
   return summary;
 }
 

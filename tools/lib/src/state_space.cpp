@@ -3,12 +3,12 @@
 #include <cmath>
 #include <cstdlib>
 
-#include "gabarit/host/error.hpp"
+#include "gabarit/app/error.hpp"
 
 namespace gabarit::host {
 
 Axis parse_axis(const std::string& text, const std::string& what) {
-  const auto bad = [&](const std::string& why) { return Error(what + " '" + text + "': " + why + " (want MIN:MAX:CELLS)"); };
+  const auto bad = [&](const std::string& why) { return app::Error(what + " '" + text + "': " + why + " (want MIN:MAX:CELLS)"); };
   const std::size_t a = text.find(':');
   const std::size_t b = a == std::string::npos ? a : text.find(':', a + 1);
   if (b == std::string::npos || text.find(':', b + 1) != std::string::npos) throw bad("need three fields");

@@ -7,7 +7,7 @@
 #include <set>
 
 #include "gabarit/deterministic_math.hpp"
-#include "gabarit/host/error.hpp"
+#include "gabarit/app/error.hpp"
 #include "gabarit/host/rng.hpp"
 
 namespace gabarit::host {
@@ -31,7 +31,7 @@ std::vector<Point> trace_curve(double base_radius, const double (&amp)[4], const
 }  // namespace
 
 std::vector<Point> random_closed_curve(std::size_t target_points, std::uint64_t seed) {
-  if (target_points < 8 || target_points > 20000) throw Error("random shape: point count must be in 8..20000");
+  if (target_points < 8 || target_points > 20000) throw app::Error("random shape: point count must be in 8..20000");
   Rng rng(seed);
   double amp[4], phase[4];
   for (int k = 0; k < 4; ++k) {
@@ -60,8 +60,8 @@ void fit_image_to_shape(SynthOptions& o) {
   o.height = std::max<std::uint32_t>(256, static_cast<std::uint32_t>(2 * (extent_y + room) + 1));
 }
 
-GrayImage render_frame(const SynthOptions& o, std::int32_t x, std::int32_t y, std::uint64_t frame_seed) {
-  GrayImage image(o.width, o.height, 0);
+app::GrayImage render_frame(const SynthOptions& o, std::int32_t x, std::int32_t y, std::uint64_t frame_seed) {
+  app::GrayImage image(o.width, o.height, 0);
   for (const Point& p : o.shape) {
     const std::int64_t px = std::int64_t{x} + p.x, py = std::int64_t{y} + p.y;
     if (px >= 0 && py >= 0 && px < o.width && py < o.height) image.at(static_cast<std::uint32_t>(px), static_cast<std::uint32_t>(py)) = 255;
@@ -77,10 +77,10 @@ GrayImage render_frame(const SynthOptions& o, std::int32_t x, std::int32_t y, st
 }
 
 std::vector<TruthRow> write_synthetic_sequence(const SynthOptions& o, const std::string& dir) {
-  if (o.shape.empty()) throw Error("synth: empty shape");
-  if (o.frames == 0 || o.frames > 1000000) throw Error("synth: --frames must be in 1..1000000");
-  if (o.max_step < 0 || o.max_step > 1000) throw Error("synth: --max-step must be in 0..1000");
-  if (!(o.noise >= 0.0 && o.noise <= 1.0)) throw Error("synth: --noise must be in [0, 1]");
+  if (o.shape.empty()) throw app::Error("synth: empty shape");
+  if (o.frames == 0 || o.frames > 1000000) throw app::Error("synth: --frames must be in 1..1000000");
+  if (o.max_step < 0 || o.max_step > 1000) throw app::Error("synth: --max-step must be in 0..1000");
+  if (!(o.noise >= 0.0 && o.noise <= 1.0)) throw app::Error("synth: --noise must be in [0, 1]");
   std::int32_t min_x = INT32_MAX, min_y = INT32_MAX, max_x = INT32_MIN, max_y = INT32_MIN;
   for (const Point& p : o.shape) {
     min_x = std::min(min_x, p.x); max_x = std::max(max_x, p.x);
@@ -89,12 +89,12 @@ std::vector<TruthRow> write_synthetic_sequence(const SynthOptions& o, const std:
   // Positions keep the whole shape inside the image.
   const std::int64_t lo_x = -std::int64_t{min_x}, hi_x = std::int64_t{o.width} - 1 - max_x;
   const std::int64_t lo_y = -std::int64_t{min_y}, hi_y = std::int64_t{o.height} - 1 - max_y;
-  if (lo_x > hi_x || lo_y > hi_y) throw Error("synth: the shape does not fit in a " + std::to_string(o.width) + "x" + std::to_string(o.height) + " image");
+  if (lo_x > hi_x || lo_y > hi_y) throw app::Error("synth: the shape does not fit in a " + std::to_string(o.width) + "x" + std::to_string(o.height) + " image");
 
   std::filesystem::create_directories(dir);
-  Y4mWriter video(dir + "/frames.y4m", o.width, o.height);
+  app::Y4mWriter video(dir + "/frames.y4m", o.width, o.height);
   std::ofstream gt(dir + "/gt.csv");
-  if (!gt) throw Error(dir + "/gt.csv: cannot create");
+  if (!gt) throw app::Error(dir + "/gt.csv: cannot create");
   gt << "frame,x,y,theta_deg,depth,visible\n";
 
   Rng motion(o.seed);
@@ -118,14 +118,14 @@ std::vector<TruthRow> write_synthetic_sequence(const SynthOptions& o, const std:
     truth.push_back({f, x, y});
   }
   video.close();
-  if (!gt.flush()) throw Error(dir + "/gt.csv: write failed");
+  if (!gt.flush()) throw app::Error(dir + "/gt.csv: write failed");
 
   write_points_csv(dir + "/model.csv", o.shape);
   const std::int32_t radius = std::max({-min_x, max_x, -min_y, max_y}) + 2;
   const auto side = static_cast<std::uint32_t>(2 * radius + 1);
-  GrayImage model(side, side, 0);
+  app::GrayImage model(side, side, 0);
   for (const Point& p : o.shape) model.at(static_cast<std::uint32_t>(radius + p.x), static_cast<std::uint32_t>(radius + p.y)) = 255;
-  write_pgm(dir + "/model.pgm", model);
+  app::write_pgm(dir + "/model.pgm", model);
   return truth;
 }
 

@@ -6,7 +6,7 @@
 
 #include "gabarit/byte_order.hpp"
 #include "gabarit/host/decimation.hpp"
-#include "gabarit/host/error.hpp"
+#include "gabarit/app/error.hpp"
 #include "gabarit/host/stencil.hpp"
 #include "gabarit/table_format.hpp"
 #include "gabarit/table_view.hpp"
@@ -25,147 +25,149 @@ void put_axis(std::byte* at, const Axis& a) {
 
 }  // namespace
 
-std::vector<std::byte> build_table(const ModelStack& model, const BuildOptions& options) {
-  if (model.depths.empty()) throw Error("model has no depth images");
-  if (model.depths.size() > tf::kMaxDepths) throw Error("too many focus-stack images");
-  StateSpace space = options.space;
-  space.depths = static_cast<std::uint16_t>(model.depths.size());
-  if (space.cell_count() > tf::kMaxCells) {
-    throw Error("state space has " + std::to_string(space.cell_count()) + " cells; the format allows " +
-                std::to_string(tf::kMaxCells));
+Stencils compute_stencils(const ModelStack& model, const BuildOptions& options) {
+  if (model.depths.empty()) throw app::Error("model has no depth images");
+  if (model.depths.size() > tf::kMaxDepths) throw app::Error("too many focus-stack images");
+  Stencils out;
+  out.space = options.space;
+  out.space.depths = static_cast<std::uint16_t>(model.depths.size());
+  if (out.space.cell_count() > tf::kMaxCells) {
+    throw app::Error("state space has " + std::to_string(out.space.cell_count()) + " cells; the format allows " +
+                     std::to_string(tf::kMaxCells));
   }
   std::size_t model_points = 0;
   for (const auto& d : model.depths) {
-    if (d.empty()) throw Error("a focus-stack image has no feature points");
+    if (d.empty()) throw app::Error("a focus-stack image has no feature points");
     model_points += d.size();
     for (const Point& p : d) {
-      if (p.x < INT16_MIN || p.x > INT16_MAX || p.y < INT16_MIN || p.y > INT16_MAX) throw Error("model point out of int16 range");
+      if (p.x < INT16_MIN || p.x > INT16_MAX || p.y < INT16_MIN || p.y > INT16_MAX) throw app::Error("model point out of int16 range");
     }
   }
-  if (model_points > tf::kMaxModelPoints) throw Error("too many model points");
+  if (model_points > tf::kMaxModelPoints) throw app::Error("too many model points");
 
-  // Stencils, cell by cell, and the ROI that holds them all.
-  std::vector<CellBounds> cells = space.cells();
-  std::vector<std::vector<Point>> stencils(cells.size());
+  out.cells = out.space.cells();
+  out.points.resize(out.cells.size());
   std::int64_t min_x = std::numeric_limits<std::int64_t>::max(), min_y = min_x;
   std::int64_t max_x = std::numeric_limits<std::int64_t>::min(), max_y = max_x;
-  std::uint64_t total = 0;
   // The rotation sweep depends only on (depth, theta cell), shared by the
   // x*y cells that follow one another in index order.
   std::vector<Point> arcs;
-  for (std::size_t c = 0; c < cells.size(); ++c) {
-    const CellBounds& u = cells[c];
-    if (c == 0 || u.depth != cells[c - 1].depth || u.theta_lo_deg != cells[c - 1].theta_lo_deg ||
-        u.theta_hi_deg != cells[c - 1].theta_hi_deg) {
+  for (std::size_t c = 0; c < out.cells.size(); ++c) {
+    const CellBounds& u = out.cells[c];
+    if (c == 0 || u.depth != out.cells[c - 1].depth || u.theta_lo_deg != out.cells[c - 1].theta_lo_deg ||
+        u.theta_hi_deg != out.cells[c - 1].theta_hi_deg) {
       arcs = swept_arcs(model.depths[u.depth], u.theta_lo_deg, u.theta_hi_deg);
     }
-    stencils[c] = translate_sweep(arcs, u, options.translations);
-    for (const Point& p : stencils[c]) {
+    out.points[c] = translate_sweep(arcs, u, options.translations);
+    for (const Point& p : out.points[c]) {
       min_x = std::min<std::int64_t>(min_x, p.x);
       max_x = std::max<std::int64_t>(max_x, p.x);
       min_y = std::min<std::int64_t>(min_y, p.y);
       max_y = std::max<std::int64_t>(max_y, p.y);
     }
-    total += stencils[c].size();
-    if (total > tf::kMaxReferences) throw Error("table would exceed " + std::to_string(tf::kMaxReferences) + " references; use fewer or smaller cells");
-    if (options.progress && (c % 64 == 0 || c + 1 == cells.size())) options.progress(c + 1, cells.size());
+    out.references += out.points[c].size();
+    if (out.references > tf::kMaxReferences) throw app::Error("table would exceed " + std::to_string(tf::kMaxReferences) + " references; use fewer or smaller cells");
+    if (options.progress && (c % 64 == 0 || c + 1 == out.cells.size())) options.progress(c + 1, out.cells.size());
   }
   const std::int64_t roi_w = max_x - min_x + 1, roi_h = max_y - min_y + 1;
   if (roi_w > 0xFFFF || roi_h > 0xFFFF || roi_w * roi_h > tf::kMaxRoiPixels || min_x < INT16_MIN || min_y < INT16_MIN) {
-    throw Error("ROI " + std::to_string(roi_w) + "x" + std::to_string(roi_h) + " is too large for the table format");
+    throw app::Error("ROI " + std::to_string(roi_w) + "x" + std::to_string(roi_h) + " is too large for the table format");
   }
-  const auto pixel_of = [&](const Point& p) {
-    return static_cast<std::uint32_t>((p.y - min_y) * roi_w + (p.x - min_x));
-  };
-  const auto pixels = static_cast<std::uint32_t>(roi_w * roi_h);
+  out.roi_min_x = static_cast<std::int32_t>(min_x);
+  out.roi_min_y = static_cast<std::int32_t>(min_y);
+  out.roi_width = static_cast<std::uint16_t>(roi_w);
+  out.roi_height = static_cast<std::uint16_t>(roi_h);
+  return out;
+}
 
+CsrLists assemble_csr(Stencils& stencils, const BuildOptions& options) {
+  const std::uint32_t pixels = std::uint32_t{stencils.roi_width} * stencils.roi_height;
   // Overlap n(p) and decimation, in (cell, pixel) order.
   std::vector<std::uint32_t> cover(pixels, 0);
-  for (const auto& s : stencils)
-    for (const Point& p : s) ++cover[pixel_of(p)];
+  for (const auto& s : stencils.points)
+    for (const Point& p : s) ++cover[stencils.pixel_of(p)];
   std::vector<std::uint32_t> overlap;
-  overlap.reserve(total);
-  for (const auto& s : stencils)
-    for (const Point& p : s) overlap.push_back(cover[pixel_of(p)]);
+  overlap.reserve(stencils.references);
+  for (const auto& s : stencils.points)
+    for (const Point& p : s) overlap.push_back(cover[stencils.pixel_of(p)]);
   const std::vector<bool> kept = decimate(overlap, options.keep, options.seed, options.decimation);
 
   // CSR: count per pixel, prefix sums, then fill in increasing cell order so
   // each pixel's list is strictly increasing.
-  std::vector<std::uint32_t> offsets(pixels + 1, 0);
+  CsrLists csr;
+  csr.offsets.assign(pixels + 1, 0);
   std::size_t i = 0;
-  for (std::size_t c = 0; c < stencils.size(); ++c) {
+  for (std::size_t c = 0; c < stencils.points.size(); ++c) {
     std::uint32_t size = 0;
-    for (const Point& p : stencils[c]) {
+    for (const Point& p : stencils.points[c]) {
       if (kept[i++]) {
-        ++offsets[pixel_of(p) + 1];
+        ++csr.offsets[stencils.pixel_of(p) + 1];
         ++size;
       }
     }
-    cells[c].stencil_size = size;
+    stencils.cells[c].stencil_size = size;
   }
-  for (std::uint32_t p = 0; p < pixels; ++p) offsets[p + 1] += offsets[p];
-  const std::uint32_t references = offsets[pixels];
-  std::vector<std::uint32_t> refs(references);
-  std::vector<std::uint32_t> fill(offsets.begin(), offsets.end() - 1);
+  for (std::uint32_t p = 0; p < pixels; ++p) csr.offsets[p + 1] += csr.offsets[p];
+  csr.cells.resize(csr.offsets[pixels]);
+  std::vector<std::uint32_t> fill(csr.offsets.begin(), csr.offsets.end() - 1);
   i = 0;
-  for (std::size_t c = 0; c < stencils.size(); ++c)
-    for (const Point& p : stencils[c])
-      if (kept[i++]) refs[fill[pixel_of(p)]++] = static_cast<std::uint32_t>(c);
+  for (std::size_t c = 0; c < stencils.points.size(); ++c)
+    for (const Point& p : stencils.points[c])
+      if (kept[i++]) csr.cells[fill[stencils.pixel_of(p)]++] = static_cast<std::uint32_t>(c);
+  return csr;
+}
 
-  // Serialise.
+std::vector<std::byte> serialise_table(const ModelStack& model, const BuildOptions& options, const Stencils& stencils,
+                                       const CsrLists& csr) {
+  const std::vector<CellBounds>& cells = stencils.cells;
   const auto cell_count = static_cast<std::uint32_t>(cells.size());
+  const std::uint32_t pixels = std::uint32_t{stencils.roi_width} * stencils.roi_height;
+  const auto references = static_cast<std::uint32_t>(csr.cells.size());
+  std::uint32_t model_points = 0;
+  for (const auto& d : model.depths) model_points += static_cast<std::uint32_t>(d.size());
   const std::uint8_t ref_bytes = tf::narrowest_reference_bytes(cell_count);
-  std::uint32_t at = tf::kHeaderBytes;
-  const std::uint32_t cells_at = at;
-  at = tf::align_up(at + cell_count * tf::kCellDescriptorBytes);
-  const std::uint32_t offsets_at = at;
-  at = tf::align_up(at + (pixels + 1) * 4);
-  const std::uint32_t refs_at = at;
-  at = tf::align_up(at + references * ref_bytes);
-  const std::uint32_t counts_at = at;
-  at = tf::align_up(at + static_cast<std::uint32_t>(model.depths.size()) * 4);
-  const std::uint32_t points_at = at;
-  at = tf::align_up(at + static_cast<std::uint32_t>(model_points) * tf::kModelPointBytes);
+  const tf::Layout layout = tf::layout_of(
+      {cell_count, pixels, references, ref_bytes, static_cast<std::uint16_t>(model.depths.size()), model_points});
 
-  std::vector<std::byte> out(at, std::byte{0});
+  std::vector<std::byte> out(layout.file_bytes, std::byte{0});
   std::byte* b = out.data();
   std::memcpy(b + off::kMagic, tf::kMagic, sizeof tf::kMagic);
   store_le<std::uint16_t>(b + off::kVersionMajor, tf::kVersionMajor);
   store_le<std::uint16_t>(b + off::kVersionMinor, tf::kVersionMinor);
   store_le<std::uint32_t>(b + off::kHeaderBytes, tf::kHeaderBytes);
-  store_le<std::uint32_t>(b + off::kFileBytes, at);
+  store_le<std::uint32_t>(b + off::kFileBytes, layout.file_bytes);
   store_le<std::uint32_t>(b + off::kCellCount, cell_count);
   store_le<std::uint32_t>(b + off::kReferenceCount, references);
-  store_le<std::uint16_t>(b + off::kRoiWidth, static_cast<std::uint16_t>(roi_w));
-  store_le<std::uint16_t>(b + off::kRoiHeight, static_cast<std::uint16_t>(roi_h));
-  store_le<std::int16_t>(b + off::kRoiOriginX, static_cast<std::int16_t>(min_x));
-  store_le<std::int16_t>(b + off::kRoiOriginY, static_cast<std::int16_t>(min_y));
+  store_le<std::uint16_t>(b + off::kRoiWidth, stencils.roi_width);
+  store_le<std::uint16_t>(b + off::kRoiHeight, stencils.roi_height);
+  store_le<std::int16_t>(b + off::kRoiOriginX, static_cast<std::int16_t>(stencils.roi_min_x));
+  store_le<std::int16_t>(b + off::kRoiOriginY, static_cast<std::int16_t>(stencils.roi_min_y));
   store_le<std::uint8_t>(b + off::kReferenceBytes, ref_bytes);
   store_le<std::uint8_t>(b + off::kDetectorKind, static_cast<std::uint8_t>(model.detector.kind));
   store_le<std::uint16_t>(b + off::kDetectorThreshold, model.detector.threshold);
   std::uint32_t max_stencil = 0;
   for (const CellBounds& c : cells) max_stencil = std::max(max_stencil, c.stencil_size);
   store_le<std::uint32_t>(b + off::kMaxStencilSize, max_stencil);
-  store_le<std::uint32_t>(b + off::kModelPointCount, static_cast<std::uint32_t>(model_points));
+  store_le<std::uint32_t>(b + off::kModelPointCount, model_points);
   store_le<std::uint16_t>(b + off::kDepthCount, static_cast<std::uint16_t>(model.depths.size()));
-  put_axis(b + off::kAxisX, space.x);
-  put_axis(b + off::kAxisY, space.y);
-  put_axis(b + off::kAxisTheta, space.theta);
+  put_axis(b + off::kAxisX, stencils.space.x);
+  put_axis(b + off::kAxisY, stencils.space.y);
+  put_axis(b + off::kAxisTheta, stencils.space.theta);
   store_le<float>(b + off::kKeepRatio, static_cast<float>(options.keep));
   store_le<float>(b + off::kModelRefX, model.ref_x);
   store_le<float>(b + off::kModelRefY, model.ref_y);
   store_le<std::uint16_t>(b + off::kModelWidth, model.image_width);
   store_le<std::uint16_t>(b + off::kModelHeight, model.image_height);
   store_le<std::uint64_t>(b + off::kSeed, options.seed);
-  store_le<std::uint32_t>(b + off::kCellsOffset, cells_at);
-  store_le<std::uint32_t>(b + off::kPixelOffsetsOffset, offsets_at);
-  store_le<std::uint32_t>(b + off::kReferencesOffset, refs_at);
-  store_le<std::uint32_t>(b + off::kModelCountsOffset, counts_at);
-  store_le<std::uint32_t>(b + off::kModelPointsOffset, points_at);
+  store_le<std::uint32_t>(b + off::kCellsOffset, layout.cells);
+  store_le<std::uint32_t>(b + off::kPixelOffsetsOffset, layout.pixel_offsets);
+  store_le<std::uint32_t>(b + off::kReferencesOffset, layout.references);
+  store_le<std::uint32_t>(b + off::kModelCountsOffset, layout.model_counts);
+  store_le<std::uint32_t>(b + off::kModelPointsOffset, layout.model_points);
 
   namespace co = tf::cell_offset;
   for (std::uint32_t c = 0; c < cell_count; ++c) {
-    std::byte* d = b + cells_at + std::size_t{c} * tf::kCellDescriptorBytes;
+    std::byte* d = b + layout.cells + std::size_t{c} * tf::kCellDescriptorBytes;
     store_le<float>(d + co::kXLo, cells[c].x_lo);
     store_le<float>(d + co::kXHi, cells[c].x_hi);
     store_le<float>(d + co::kYLo, cells[c].y_lo);
@@ -175,26 +177,32 @@ std::vector<std::byte> build_table(const ModelStack& model, const BuildOptions& 
     store_le<std::uint16_t>(d + co::kDepth, cells[c].depth);
     store_le<std::uint32_t>(d + co::kStencilSize, cells[c].stencil_size);
   }
-  for (std::uint32_t p = 0; p <= pixels; ++p) store_le<std::uint32_t>(b + offsets_at + std::size_t{p} * 4, offsets[p]);
+  for (std::uint32_t p = 0; p <= pixels; ++p) store_le<std::uint32_t>(b + layout.pixel_offsets + std::size_t{p} * 4, csr.offsets[p]);
   for (std::uint32_t r = 0; r < references; ++r) {
-    std::byte* d = b + refs_at + std::size_t{r} * ref_bytes;
+    std::byte* d = b + layout.references + std::size_t{r} * ref_bytes;
     switch (ref_bytes) {
-      case 1: store_le<std::uint8_t>(d, static_cast<std::uint8_t>(refs[r])); break;
-      case 2: store_le<std::uint16_t>(d, static_cast<std::uint16_t>(refs[r])); break;
-      default: store_le<std::uint32_t>(d, refs[r]); break;
+      case 1: store_le<std::uint8_t>(d, static_cast<std::uint8_t>(csr.cells[r])); break;
+      case 2: store_le<std::uint16_t>(d, static_cast<std::uint16_t>(csr.cells[r])); break;
+      default: store_le<std::uint32_t>(d, csr.cells[r]); break;
     }
   }
   std::size_t k = 0;
   for (std::size_t d = 0; d < model.depths.size(); ++d) {
-    store_le<std::uint32_t>(b + counts_at + d * 4, static_cast<std::uint32_t>(model.depths[d].size()));
+    store_le<std::uint32_t>(b + layout.model_counts + d * 4, static_cast<std::uint32_t>(model.depths[d].size()));
     for (const Point& p : model.depths[d]) {
-      store_le<std::int16_t>(b + points_at + k * 4, static_cast<std::int16_t>(p.x));
-      store_le<std::int16_t>(b + points_at + k * 4 + 2, static_cast<std::int16_t>(p.y));
+      store_le<std::int16_t>(b + layout.model_points + k * 4, static_cast<std::int16_t>(p.x));
+      store_le<std::int16_t>(b + layout.model_points + k * 4 + 2, static_cast<std::int16_t>(p.y));
       ++k;
     }
   }
   store_le<std::uint32_t>(b + off::kCrc32, table_checksum(out));
   return out;
+}
+
+std::vector<std::byte> build_table(const ModelStack& model, const BuildOptions& options) {
+  Stencils stencils = compute_stencils(model, options);
+  const CsrLists csr = assemble_csr(stencils, options);
+  return serialise_table(model, options, stencils, csr);
 }
 
 }  // namespace gabarit::host

@@ -9,14 +9,14 @@
 #include "gabarit/byte_order.hpp"
 #include "gabarit/crc32.hpp"
 #include "gabarit/deterministic_math.hpp"
-#include "gabarit/host/error.hpp"
-#include "gabarit/host/image_io.hpp"
-#include "gabarit/host/mapped_file.hpp"
+#include "gabarit/app/error.hpp"
+#include "gabarit/app/image_io.hpp"
+#include "gabarit/app/mapped_file.hpp"
 #include "gabarit/host/rng.hpp"
 #include "gabarit/host/synth.hpp"
 #include "gabarit/host/table_builder.hpp"
 #include "gabarit/host/tracking_run.hpp"
-#include "gabarit/platform/test_vectors.hpp"
+#include "gabarit/app/test_vectors.hpp"
 
 namespace gabarit::host {
 namespace {
@@ -45,11 +45,11 @@ std::vector<Point> at_depth(const std::vector<Point>& base, std::uint16_t n) {
 }  // namespace
 
 VectorSceneSummary write_test_vectors(const VectorSceneOptions& o, const std::string& dir) {
-  if (o.model_points < 100 || o.model_points > 5000) throw Error("vectors: model points must be in 100..5000");
-  if (o.depths < 1 || o.depths > 16) throw Error("vectors: depths must be in 1..16");
-  if (o.frames < 1 || o.frames > 1000) throw Error("vectors: frames must be in 1..1000");
-  if (!(o.keep > 0 && o.keep <= 1)) throw Error("vectors: keep must be in (0, 1]");
-  if (!(o.noise >= 0 && o.noise <= 1)) throw Error("vectors: noise must be in [0, 1]");
+  if (o.model_points < 100 || o.model_points > 5000) throw app::Error("vectors: model points must be in 100..5000");
+  if (o.depths < 1 || o.depths > 16) throw app::Error("vectors: depths must be in 1..16");
+  if (o.frames < 1 || o.frames > 1000) throw app::Error("vectors: frames must be in 1..1000");
+  if (!(o.keep > 0 && o.keep <= 1)) throw app::Error("vectors: keep must be in (0, 1]");
+  if (!(o.noise >= 0 && o.noise <= 1)) throw app::Error("vectors: noise must be in [0, 1]");
 
   ModelStack model;
   const std::vector<Point> base = nested_curves(o.model_points, o.seed);
@@ -66,7 +66,7 @@ VectorSceneSummary write_test_vectors(const VectorSceneOptions& o, const std::st
   build.seed = o.seed;
   const std::vector<std::byte> table_bytes = build_table(model, build);
   TableView table;
-  if (const Status s = TableView::open(table_bytes, table); s != Status::kOk) throw Error(std::string("vectors: built table invalid: ") + status_name(s));
+  if (const Status s = TableView::open(table_bytes, table); s != Status::kOk) throw app::Error(std::string("vectors: built table invalid: ") + status_name(s));
 
   std::int32_t extent = 0;
   for (const auto& depth : model.depths)
@@ -93,7 +93,7 @@ VectorSceneSummary write_test_vectors(const VectorSceneOptions& o, const std::st
     y += static_cast<float>(rng.uniform_int(-5, 5));
     theta += static_cast<float>(rng.uniform_int(-2, 2));
     depth = std::clamp(depth + rng.uniform_int(-1, 1), 0, static_cast<std::int32_t>(o.depths) - 1);
-    GrayImage image(side, side, 0);
+    app::GrayImage image(side, side, 0);
     const SinCos sc = sin_cos_deg(theta);
     for (const Point& m : model.depths[static_cast<std::size_t>(depth)]) {
       const std::int32_t px = round_to_int(x + sc.cos * static_cast<float>(m.x) - sc.sin * static_cast<float>(m.y));
@@ -113,7 +113,7 @@ VectorSceneSummary write_test_vectors(const VectorSceneOptions& o, const std::st
 
   // The host's results, closed loop, as every target will replay them.
   VectorSceneSummary summary;
-  TrackerBuffers buffers(table, VoterChoice::kCsr);
+  app::TrackerBuffers buffers(table, app::VoterChoice::kCsr);
   Pose pose = set.init;
   const std::size_t records_at = vectors::kHeaderBytes + std::size_t{o.frames} * side * side;
   for (std::uint32_t f = 0; f < o.frames; ++f) {
@@ -121,7 +121,7 @@ VectorSceneSummary write_test_vectors(const VectorSceneOptions& o, const std::st
                          side, side, side};
     StepResult step;
     if (const Status s = track_step(table, set.detector, view, pose, buffers.scratch(), step); s != Status::kOk)
-      throw Error(std::string("vectors: track_step failed: ") + status_name(s));
+      throw app::Error(std::string("vectors: track_step failed: ") + status_name(s));
     vectors::encode_record(step, std::span<std::byte, vectors::kRecordBytes>(file.data() + records_at + std::size_t{f} * vectors::kRecordBytes,
                                                                              vectors::kRecordBytes));
     if (std::abs(step.pose.x - true_x[f]) <= 1.5f && std::abs(step.pose.y - true_y[f]) <= 1.5f &&
@@ -134,8 +134,8 @@ VectorSceneSummary write_test_vectors(const VectorSceneOptions& o, const std::st
   store_le<std::uint32_t>(file.data() + body, crc32(std::span<const std::byte>(file.data(), body)));
 
   std::filesystem::create_directories(dir);
-  write_file((std::filesystem::path(dir) / "table.gbt").string(), table_bytes);
-  write_file((std::filesystem::path(dir) / "vectors.gbv").string(), file);
+  app::write_file((std::filesystem::path(dir) / "table.gbt").string(), table_bytes);
+  app::write_file((std::filesystem::path(dir) / "vectors.gbv").string(), file);
   summary.model_points = model.depths[0].size();
   summary.table_bytes = table_bytes.size();
   summary.vector_bytes = file.size();

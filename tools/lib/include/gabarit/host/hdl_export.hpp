@@ -31,7 +31,7 @@ struct HdlLayout {
   std::uint32_t max_range_count() const;  // the longest {begin, count} range of any pixel and lane
 };
 
-// Throws Error for lanes other than 1, 2, 4, 8 or stencils above 65535 pixels.
+// Throws app::Error for lanes other than 1, 2, 4, 8 or stencils above 65535 pixels.
 HdlLayout hdl_layout(const TableView& table, std::uint32_t lanes);
 
 // SystemVerilog's $clog2.
@@ -62,7 +62,7 @@ struct HdlCapacities {
 };
 
 // Writes offsets.mem, refs_<k>.mem, sizes_<k>.mem and gabarit_table_pkg.sv
-// into `dir`. Throws Error if the table exceeds the capacities. Returns a
+// into `dir`. Throws app::Error if the table exceeds the capacities. Returns a
 // one-line summary.
 std::string write_hdl_export(const HdlLayout& layout, const std::string& dir, HdlCapacities capacities = {});
 

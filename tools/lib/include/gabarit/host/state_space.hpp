@@ -13,7 +13,7 @@
 
 namespace gabarit::host {
 
-// Parses "MIN:MAX:CELLS"; throws Error naming `what` on bad input.
+// Parses "MIN:MAX:CELLS"; throws app::Error naming `what` on bad input.
 Axis parse_axis(const std::string& text, const std::string& what);
 
 struct StateSpace {

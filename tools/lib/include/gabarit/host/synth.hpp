@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "gabarit/host/image_io.hpp"
+#include "gabarit/app/image_io.hpp"
 #include "gabarit/host/model.hpp"
 
 namespace gabarit::host {
@@ -43,6 +43,6 @@ void fit_image_to_shape(SynthOptions& options);
 std::vector<TruthRow> write_synthetic_sequence(const SynthOptions& options, const std::string& dir);
 
 // Renders one frame: shape at (x, y), then noise from `rng`-seeded draws.
-GrayImage render_frame(const SynthOptions& options, std::int32_t x, std::int32_t y, std::uint64_t frame_seed);
+app::GrayImage render_frame(const SynthOptions& options, std::int32_t x, std::int32_t y, std::uint64_t frame_seed);
 
 }  // namespace gabarit::host

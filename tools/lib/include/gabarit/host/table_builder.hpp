@@ -26,6 +26,34 @@ struct BuildOptions {
   std::function<void(std::size_t, std::size_t)> progress;
 };
 
+// build_table in its three stages, for a caller (or a test) that wants one:
+//   compute_stencils  every cell's stencil, in cell index order, and the ROI
+//                     that holds them all (stencil.hpp);
+//   assemble_csr      decimation (decimation.hpp) and the pixel -> cells
+//                     lists, each pixel's cells in increasing order;
+//   serialise_table   the bytes, placed by table_format::layout_of.
+struct Stencils {
+  StateSpace space;                       // with the model's depth count
+  std::vector<CellBounds> cells;          // stencil_size is set by assemble_csr
+  std::vector<std::vector<Point>> points; // per cell, offsets from the ROI centre
+  std::int32_t roi_min_x = 0, roi_min_y = 0;
+  std::uint16_t roi_width = 0, roi_height = 0;
+  std::uint64_t references = 0;           // before decimation
+  std::uint32_t pixel_of(const Point& p) const {
+    return static_cast<std::uint32_t>((p.y - roi_min_y) * roi_width + (p.x - roi_min_x));
+  }
+};
+struct CsrLists {
+  std::vector<std::uint32_t> offsets;  // roi pixels + 1
+  std::vector<std::uint32_t> cells;    // the references
+};
+Stencils compute_stencils(const ModelStack& model, const BuildOptions& options);
+CsrLists assemble_csr(Stencils& stencils, const BuildOptions& options);
+std::vector<std::byte> serialise_table(const ModelStack& model, const BuildOptions& options, const Stencils& stencils,
+                                       const CsrLists& csr);
+
+// The three stages in turn. Throws app::Error naming the limit a model or a
+// space exceeds.
 std::vector<std::byte> build_table(const ModelStack& model, const BuildOptions& options);
 
 }  // namespace gabarit::host

@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-#include "gabarit/host/image_io.hpp"
+#include "gabarit/app/image_io.hpp"
 #include "gabarit/host/model.hpp"
 
 namespace gabarit::host {
@@ -23,16 +23,16 @@ std::vector<Point> thesis_curve();
 // Edge points (gradient-rows detector, threshold searched so the count comes
 // closest to `target`) of `photo` after averaging `downscale` x `downscale`
 // blocks, relative to the image centre.
-std::vector<Point> photo_edge_points(const GrayImage& photo, std::size_t target, std::uint32_t downscale);
+std::vector<Point> photo_edge_points(const app::GrayImage& photo, std::size_t target, std::uint32_t downscale);
 
 // A photograph of python3-skimage's data folder (NAME.png: coffee, camera,
 // gravel, brick, ...) converted to PGM with netpbm into the temporary
-// directory, once; returns its path. Throws Error saying what to install.
+// directory, once; returns its path. Throws app::Error saying what to install.
 std::string debian_photo_pgm(const std::string& name);
 
 // The Debian photograph behind `watch` as a PGM path: $GABARIT_WATCH_PGM if
 // set, else python3-skimage's coffee.png converted with pngtopnm | ppmtopgm
-// into the temporary directory. Throws Error saying what to install.
+// into the temporary directory. Throws app::Error saying what to install.
 std::string watch_photo_pgm();
 std::vector<Point> watch_shape();
 

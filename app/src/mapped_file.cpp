@@ -1,4 +1,4 @@
-#include "gabarit/host/mapped_file.hpp"
+#include "gabarit/app/mapped_file.hpp"
 
 #include <fcntl.h>
 #include <sys/mman.h>
@@ -9,9 +9,9 @@
 #include <cstdio>
 #include <cstring>
 
-#include "gabarit/host/error.hpp"
+#include "gabarit/app/error.hpp"
 
-namespace gabarit::host {
+namespace gabarit::app {
 
 MappedFile::MappedFile(const std::string& path) {
   const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
@@ -38,6 +38,12 @@ MappedFile::~MappedFile() {
   if (data_) ::munmap(data_, size_);
 }
 
+TableFile::TableFile(const std::string& path) : file_(path) {
+  if (const Status s = TableView::open(file_.bytes(), view_); s != Status::kOk) {
+    throw Error(path + ": not a valid table: " + status_name(s));
+  }
+}
+
 std::vector<std::byte> read_file(const std::string& path) {
   MappedFile m(path);
   return {m.bytes().begin(), m.bytes().end()};
@@ -50,4 +56,4 @@ void write_file(const std::string& path, std::span<const std::byte> bytes) {
   if (std::fclose(f) != 0 || !ok) throw Error(path + ": write failed");
 }
 
-}  // namespace gabarit::host
+}  // namespace gabarit::app

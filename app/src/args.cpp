@@ -1,4 +1,4 @@
-#include "args.hpp"
+#include "gabarit/app/args.hpp"
 
 #include <cctype>
 #include <cerrno>
@@ -7,7 +7,7 @@
 #include <cstdlib>
 #include <sstream>
 
-namespace gabarit::cli {
+namespace gabarit::app {
 
 Args::Args(std::string command, std::string synopsis, std::string description, std::vector<Option> options,
            std::string positional_name)
@@ -157,11 +157,22 @@ Pose parse_init_pose(const std::string& text, const TableView& table, const std:
   return pose;
 }
 
-host::VoterChoice parse_voter(const std::string& text, const std::string& what) {
-  if (text == "auto") return host::VoterChoice::kAuto;
-  if (text == "csr") return host::VoterChoice::kCsr;
-  if (text == "dense") return host::VoterChoice::kDense;
+FrameSize parse_size(const std::string& text, const std::string& what, std::uint32_t min_side, std::uint32_t max_side) {
+  unsigned long long w = 0, h = 0;
+  char tail = 0;
+  if (std::sscanf(text.c_str(), "%llux%llu%c", &w, &h, &tail) != 2 || w < min_side || h < min_side || w > max_side ||
+      h > max_side || text.find('-') != std::string::npos) {
+    throw UsageError(what + " '" + text + "': want WxH with " + std::to_string(min_side) + " <= W,H <= " +
+                     std::to_string(max_side));
+  }
+  return {static_cast<std::uint32_t>(w), static_cast<std::uint32_t>(h)};
+}
+
+VoterChoice parse_voter(const std::string& text, const std::string& what) {
+  if (text == "auto") return VoterChoice::kAuto;
+  if (text == "csr") return VoterChoice::kCsr;
+  if (text == "dense") return VoterChoice::kDense;
   throw UsageError(what + " '" + text + "': want auto, csr or dense");
 }
 
-}  // namespace gabarit::cli
+}  // namespace gabarit::app

@@ -1,13 +1,13 @@
-#include "gabarit/host/image_io.hpp"
+#include "gabarit/app/image_io.hpp"
 
 #include <algorithm>
 #include <cctype>
 #include <cstring>
 #include <filesystem>
 
-#include "gabarit/host/error.hpp"
+#include "gabarit/app/error.hpp"
 
-namespace gabarit::host {
+namespace gabarit::app {
 namespace {
 
 struct FileCloser {
@@ -207,4 +207,4 @@ void Y4mWriter::close() {
   file_ = nullptr;
 }
 
-}  // namespace gabarit::host
+}  // namespace gabarit::app

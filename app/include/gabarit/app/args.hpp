@@ -8,17 +8,17 @@
 #include <string>
 #include <vector>
 
-#include "gabarit/host/error.hpp"
-#include "gabarit/host/tracking_run.hpp"
+#include "gabarit/app/error.hpp"
+#include "gabarit/app/scratch.hpp"
 #include "gabarit/table_view.hpp"
 #include "gabarit/tracker.hpp"
 
-namespace gabarit::cli {
+namespace gabarit::app {
 
 // Bad usage: the CLI prints the message and the usage line, exit code 2.
-class UsageError : public host::Error {
+class UsageError : public app::Error {
  public:
-  using host::Error::Error;
+  using app::Error::Error;
 };
 
 struct Option {
@@ -63,7 +63,14 @@ std::vector<double> parse_number_list(const std::string& text, const std::string
 // of the table's depths. Throws UsageError naming `what`.
 Pose parse_init_pose(const std::string& text, const TableView& table, const std::string& what);
 
-// "auto", "csr" or "dense". Throws UsageError naming `what`.
-host::VoterChoice parse_voter(const std::string& text, const std::string& what);
+struct FrameSize {
+  std::uint32_t width = 0;
+  std::uint32_t height = 0;
+};
+// "WxH" with min_side <= W, H <= max_side. Throws UsageError naming `what`.
+FrameSize parse_size(const std::string& text, const std::string& what, std::uint32_t min_side, std::uint32_t max_side);
 
-}  // namespace gabarit::cli
+// "auto", "csr" or "dense". Throws UsageError naming `what`.
+VoterChoice parse_voter(const std::string& text, const std::string& what);
+
+}  // namespace gabarit::app

@@ -7,11 +7,11 @@
 #include <stdexcept>
 #include <string>
 
-namespace gabarit::host {
+namespace gabarit::app {
 
 class Error : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;
 };
 
-}  // namespace gabarit::host
+}  // namespace gabarit::app

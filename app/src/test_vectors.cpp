@@ -1,4 +1,4 @@
-#include "gabarit/platform/test_vectors.hpp"
+#include "gabarit/app/test_vectors.hpp"
 
 #include <cstring>
 

@@ -11,7 +11,7 @@
 
 #include "gabarit/image_view.hpp"
 
-namespace gabarit::host {
+namespace gabarit::app {
 
 struct GrayImage {
   std::uint32_t width = 0;
@@ -55,4 +55,4 @@ class Y4mWriter {
   std::uint32_t width_, height_;
 };
 
-}  // namespace gabarit::host
+}  // namespace gabarit::app

@@ -7,7 +7,9 @@
 #include <string>
 #include <vector>
 
-namespace gabarit::host {
+#include "gabarit/table_view.hpp"
+
+namespace gabarit::app {
 
 class MappedFile {
  public:
@@ -22,7 +24,23 @@ class MappedFile {
   std::size_t size_ = 0;
 };
 
+// A table file mapped and validated once (TableView::open); the view points
+// into the mapping, so the object is neither copied nor moved. Throws
+// app::Error "PATH: not a valid table: STATUS".
+class TableFile {
+ public:
+  explicit TableFile(const std::string& path);
+  TableFile(const TableFile&) = delete;
+  TableFile& operator=(const TableFile&) = delete;
+  const TableView& view() const { return view_; }
+  std::span<const std::byte> bytes() const { return file_.bytes(); }
+
+ private:
+  MappedFile file_;
+  TableView view_;
+};
+
 std::vector<std::byte> read_file(const std::string& path);
 void write_file(const std::string& path, std::span<const std::byte> bytes);
 
-}  // namespace gabarit::host
+}  // namespace gabarit::app

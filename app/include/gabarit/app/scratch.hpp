@@ -1,0 +1,50 @@
+// Scratch for hosted programs (gabarit track, gabarit-board): the kernel's
+// buffers allocated once per table, sized by the kernel's constexpr formulas
+// (tracker.hpp, recovery_search.hpp). Firmware sizes the same buffers
+// statically against the same formulas instead.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+#include "gabarit/table_view.hpp"
+#include "gabarit/tracker.hpp"
+#include "gabarit/tracking_session.hpp"
+
+namespace gabarit::app {
+
+// Which voter track_step uses: the CSR lists, word-parallel masks
+// (dense_voter.hpp; tables of at most kDenseMaxCells cells), or dense when
+// the table allows it. Results are bit-identical; only the time differs.
+enum class VoterChoice { kAuto, kCsr, kDense };
+
+// Scratch for track_step on one table. Throws app::Error when kDense is asked
+// of a table too large for it.
+class TrackerBuffers {
+ public:
+  TrackerBuffers(const TableView& table, VoterChoice voter);
+  TrackerScratch scratch();
+
+ private:
+  std::vector<RoiPoint> features_;
+  std::vector<VoteCounter> counters_;
+  std::vector<std::uint8_t> mask_;
+  std::vector<std::uint64_t> masks_, dense_scratch_;
+};
+
+// Scratch for a TrackingSession: the fine table's, the coarse table's when
+// there is one, and the recovery search's shared features when asked for
+// (recovery_search.hpp; only without a coarse table, which votes its own).
+class SessionBuffers {
+ public:
+  SessionBuffers(const TableView& fine, const TableView* coarse, VoterChoice voter, bool search_features);
+  SessionScratch scratch();
+
+ private:
+  TrackerBuffers fine_;
+  std::optional<TrackerBuffers> coarse_;
+  std::vector<RoiPoint> search_features_;
+};
+
+}  // namespace gabarit::app

@@ -1,0 +1,41 @@
+#include "gabarit/app/scratch.hpp"
+
+#include <string>
+
+#include "gabarit/app/error.hpp"
+#include "gabarit/dense_voter.hpp"
+
+namespace gabarit::app {
+
+TrackerBuffers::TrackerBuffers(const TableView& table, VoterChoice voter)
+    : features_(tracker_feature_capacity(table)),
+      counters_(voter_counter_count(table.cell_count())),
+      mask_(tracker_mask_bytes(table)) {
+  const bool fits = table.cell_count() <= kDenseMaxCells;
+  if (voter == VoterChoice::kDense && !fits) {
+    throw Error("the dense voter takes at most " + std::to_string(kDenseMaxCells) + " cells; this table has " +
+                std::to_string(table.cell_count()));
+  }
+  if (voter != VoterChoice::kCsr && fits) {
+    masks_.resize(dense_mask_words(table.roi_pixels(), table.cell_count()));
+    dense_scratch_.resize(dense_scratch_words(table.cell_count()));
+    if (build_dense_masks(table, masks_) != Status::kOk) throw Error("internal error: building dense masks failed");
+  }
+}
+
+TrackerScratch TrackerBuffers::scratch() { return {features_, counters_, mask_, masks_, dense_scratch_}; }
+
+SessionBuffers::SessionBuffers(const TableView& fine, const TableView* coarse, VoterChoice voter, bool search_features)
+    : fine_(fine, voter) {
+  if (coarse != nullptr) {
+    coarse_.emplace(*coarse, voter);
+  } else if (search_features) {
+    search_features_.resize(search_feature_capacity(fine));
+  }
+}
+
+SessionScratch SessionBuffers::scratch() {
+  return {fine_.scratch(), coarse_ ? coarse_->scratch() : TrackerScratch{}, search_features_};
+}
+
+}  // namespace gabarit::app
