@@ -1,5 +1,7 @@
 #include "gabarit/voter.hpp"
 
+#include "gabarit/assert.hpp"
+
 namespace gabarit {
 namespace {
 
@@ -117,6 +119,16 @@ Status select_top_cells(const TableView& table, std::span<const VoteCounter> cou
     top[at] = s;
   }
   return Status::kOk;
+}
+
+CellScore best_cell_in(const TableView& table, std::span<const VoteCounter> counters, CellRange range) noexcept {
+  GABARIT_ASSERT(range.begin <= range.end && range.end <= table.cell_count() && counters.size() >= range.end);
+  CellScore best{kNoCell, 0, 0};
+  for (std::uint32_t c = range.begin; c < range.end; ++c) {
+    const CellScore s{c, counters[c], table.stencil_size(c)};
+    if (best.cell == kNoCell || ranks_before(s, best)) best = s;
+  }
+  return best;
 }
 
 }  // namespace gabarit

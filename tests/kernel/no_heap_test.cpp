@@ -158,7 +158,7 @@ int main() {
   TrackingSession screened(table, nullptr, detector_of(table));
   expect_no_allocation("tracking session, recovery screened from shared features", [&] {
     SessionOptions o;
-    o.search_interval = 2;
+    o.recovery.interval = 2;
     SessionResult r;
     bool ok = screened.start(o, Pose{32, 32, 0, 0}) == Status::kOk && screened.step(view, {scratch, {}, search_features}, r) == Status::kOk;
     for (int i = 0; i < 12 && ok; ++i) ok = screened.step(blank.view(), {scratch, {}, search_features}, r) == Status::kOk;

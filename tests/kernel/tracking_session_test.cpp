@@ -132,8 +132,8 @@ TEST(TrackingSession, TheMotionFilterFollowsSmoothMotionAndRecoversAfterAnOcclus
   std::vector<RoiPoint> search_features(c.shared ? search_feature_capacity(t) : 0);
   TrackingSession session(t, nullptr, detector_of(t));
   SessionOptions options;
-  options.search_budget = c.budget;
-  options.search_interval = c.interval;
+  options.recovery.budget = c.budget;
+  options.recovery.interval = c.interval;
   ASSERT_EQ(session.start(options, Pose{40, 60, 0, 0}), Status::kOk);
   // 2 px per frame to the right; hidden for 15 frames, by when it is 30 px
   // from where it was last seen, far beyond the table's +-4 px.
@@ -209,9 +209,9 @@ TEST(TrackingSession, BadOptionsAreRefused) {
   EXPECT_EQ(session.start(o, Pose{10, 10, 0, 0}), Status::kInvalidArgument);
   EXPECT_EQ(session.start(SessionOptions{}, Pose{std::nanf(""), 10, 0, 0}), Status::kInvalidArgument);
   EXPECT_EQ(session.start(SessionOptions{}, Pose{10, 10, 0, 3}), Status::kInvalidArgument);  // no depth 3
-  for (const auto bad_option : {+[](SessionOptions& b) { b.search_interval = 0; }, +[](SessionOptions& b) { b.screen_stride = 0; },
-                                +[](SessionOptions& b) { b.coarse_proposals = 0; },
-                                +[](SessionOptions& b) { b.coarse_proposals = kMaxCoarseProposals + 1; }}) {
+  for (const auto bad_option : {+[](SessionOptions& b) { b.recovery.interval = 0; }, +[](SessionOptions& b) { b.recovery.screen_stride = 0; },
+                                +[](SessionOptions& b) { b.recovery.coarse_proposals = 0; },
+                                +[](SessionOptions& b) { b.recovery.coarse_proposals = kMaxCoarseProposals + 1; }}) {
     SessionOptions b;
     bad_option(b);
     EXPECT_EQ(session.start(b, Pose{10, 10, 0, 0}), Status::kInvalidArgument);

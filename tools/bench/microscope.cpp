@@ -214,20 +214,20 @@ int run_microscope(const std::string& dir, bool quick) {
   if (TableView::open(canny_bytes, canny_table) != Status::kOk) throw app::Error("microscope: Canny table invalid");
   track("the same, Canny variant detector", SessionOptions{}, canny_table);
   // Depth by intensity at the tracked pose (depth_by_intensity.hpp), and the
-  // recovery search spread over lost frames (SessionOptions::search_budget).
+  // recovery search spread over lost frames (RecoveryOptions::budget).
   track("filter + refinement + recovery + depth and angle by intensity", SessionOptions{}, table, true);
   // The recovery grid as it was: features detected again and every feature
   // voted at each placement.
   track("the same, each recovery placement a full track_step", SessionOptions{}, table, true, false);
   // Cheaper lost periods, traded against how soon the target is found again.
   SessionOptions every_second;
-  every_second.search_interval = 2;
+  every_second.recovery.interval = 2;
   track("the same, searching every 2nd lost frame", every_second, table, true);
   SessionOptions cheap = every_second;
-  cheap.screen_stride = 3;
+  cheap.recovery.screen_stride = 3;
   track("the same, every 2nd lost frame, screening with every 3rd feature", cheap, table, true);
   SessionOptions budgeted;
-  budgeted.search_budget = 100;
+  budgeted.recovery.budget = 100;
   track("the same, 100 of the 558 outer placements per search", budgeted, table, true);
   {
     NccBank ncc(model_images, 4, 0.5, 3);

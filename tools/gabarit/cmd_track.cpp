@@ -51,9 +51,9 @@ int track(const std::vector<std::string>& argv) {
   options.session.motion_filter = args.has("--motion-filter");
   options.session.refine = args.has("--refine");
   options.session.recover = args.has("--recover") || args.has("--coarse");
-  options.session.search_budget = static_cast<std::uint32_t>(args.integer("--search-budget", 0, 1, 558));
-  options.session.search_interval = static_cast<std::uint32_t>(args.integer("--search-interval", 1, 1, 100));
-  options.session.screen_stride = static_cast<std::uint32_t>(args.integer("--screen-stride", 2, 1, 16));
+  options.session.recovery.budget = static_cast<std::uint32_t>(args.integer("--search-budget", 0, 1, 558));
+  options.session.recovery.interval = static_cast<std::uint32_t>(args.integer("--search-interval", 1, 1, 100));
+  options.session.recovery.screen_stride = static_cast<std::uint32_t>(args.integer("--screen-stride", 2, 1, 16));
   options.threads = static_cast<unsigned>(args.integer("--threads", 1, 1, 64));
   if (options.threads > 1 && (options.session.motion_filter || options.session.refine || options.session.recover))
     throw app::UsageError("--threads applies to the plain loop, without --motion-filter, --refine, --recover or --coarse");

@@ -22,10 +22,18 @@
 // cell changes it only if it beats the current depth's best cell by
 // depth_switch_margin. When the uncertainty passes
 // lost_uncertainty_px the target is lost and recovery takes over
-// (tracking_session.hpp).
+// (recovery_search.hpp). A TrackingSession (tracking_session.hpp) runs this
+// filter around each frame's vote: predict, choose (the gate), grade, then
+// update or coast.
 #pragma once
 
 #include <cstdint>
+#include <span>
+
+#include "gabarit/pose.hpp"
+#include "gabarit/status.hpp"
+#include "gabarit/table_view.hpp"
+#include "gabarit/voter.hpp"
 
 namespace gabarit {
 
@@ -62,5 +70,61 @@ Confidence classify(float score, float next_score, float reference, const Motion
 
 // True if the parameters are usable (finite, ordered, gains in [0, 1]).
 bool valid(const MotionFilterParams& params) noexcept;
+
+// The measurement the gate lets through: the first of the n best cells
+// within the gate, possibly replaced by the current depth's best cell
+// (depth inertia). found is false when no voted candidate lies in the gate.
+struct GatedChoice {
+  bool found = false;
+  CellScore cell;
+  float score = 0.0f;       // normalised score of `cell`
+  float next_score = 0.0f;  // of the candidate ranked after the chosen one
+  bool outranked = false;   // a better-ranked candidate lay outside the gate (a distractor)
+};
+
+// The filter's state over a session. Precondition for every call:
+// valid(params) (TrackingSession::start checks it).
+class MotionFilter {
+ public:
+  void reset(const MotionFilterParams& params) noexcept {
+    params_ = params;
+    state_ = {};
+    reference_ = 0.0f;
+  }
+  // Velocity and uncertainty back to zero (a reacquired target); the
+  // reference score is kept.
+  void restart() noexcept { state_ = {}; }
+
+  // Where the next ROI goes: pose + v.
+  Pose predict(const Pose& pose) const noexcept;
+  // The gate: the n best cells of this frame's vote (counters, ROI centred on
+  // (cx, cy), measured from `predicted`) in rank order; the first within
+  // gate_px + uncertainty of the prediction. A cell of another depth than
+  // current_depth must beat the current depth's best cell by
+  // depth_switch_margin. Errors: select_top_cells'.
+  Status choose(const TableView& table, std::span<const VoteCounter> counters, const Pose& predicted, std::int32_t cx,
+                std::int32_t cy, std::uint16_t current_depth, GatedChoice& out) const noexcept;
+  // classify against the reference score; a high-confidence score then moves
+  // the reference (the first graded score sets it).
+  Confidence grade(float score, float next_score) noexcept;
+  // classify without touching the reference.
+  Confidence classify(float score, float next_score) const noexcept {
+    return gabarit::classify(score, next_score, reference_, params_);
+  }
+  // A measurement of confidence high or intermediate, taken from `previous`.
+  void update(Confidence confidence, const Pose& previous, const Pose& measured) noexcept;
+  // No measurement: v <- K3 v, uncertainty += U2.
+  void coast() noexcept;
+  // The uncertainty has passed lost_uncertainty_px.
+  bool lost() const noexcept { return state_.uncertainty_px > params_.lost_uncertainty_px; }
+
+  const MotionFilterState& state() const noexcept { return state_; }
+  float reference() const noexcept { return reference_; }
+
+ private:
+  MotionFilterParams params_;
+  MotionFilterState state_;
+  float reference_ = 0.0f;  // running score of high-confidence frames
+};
 
 }  // namespace gabarit

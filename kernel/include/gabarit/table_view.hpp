@@ -36,6 +36,12 @@ struct CellBounds {
   float theta_centre_deg() const noexcept { return (theta_lo_deg + theta_hi_deg) * 0.5f; }
 };
 
+// A half-open range of cell indices [begin, end).
+struct CellRange {
+  std::uint32_t begin = 0;
+  std::uint32_t end = 0;
+};
+
 struct ModelPoint {
   std::int16_t x = 0;
   std::int16_t y = 0;
@@ -81,6 +87,13 @@ class TableView {
 
   // Precondition: cell < cell_count().
   CellBounds cell(std::uint32_t cell) const noexcept;
+  // The cells of one focus-stack depth: cells are numbered depth-major
+  // (docs/table-format.md), cell_count() / depth_count() per depth.
+  // Precondition: depth < depth_count().
+  CellRange depth_cells(std::uint16_t depth) const noexcept {
+    const std::uint32_t per_depth = cell_count_ / depth_count_;
+    return {depth * per_depth, (depth + 1u) * per_depth};
+  }
   std::uint32_t stencil_size(std::uint32_t cell) const noexcept {
     return load_le<std::uint32_t>(cells_ + std::size_t{cell} * table_format::kCellDescriptorBytes +
                                   table_format::cell_offset::kStencilSize);

@@ -96,4 +96,8 @@ Status accumulate_votes(const TableView& table, std::span<const RoiPoint> featur
 Status select_top_cells(const TableView& table, std::span<const VoteCounter> counters,
                         std::span<CellScore> top) noexcept;
 
+// The best cell of `range` by the ranking rule (cell kNoCell for an empty
+// range). Precondition: range within the cell count, counters hold them.
+CellScore best_cell_in(const TableView& table, std::span<const VoteCounter> counters, CellRange range) noexcept;
+
 }  // namespace gabarit
