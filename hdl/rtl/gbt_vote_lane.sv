@@ -522,7 +522,7 @@ module gbt_vote_lane #(
   end
   /* verilator lint_on SYNCASYNCNET */
 `else
-  // Proved by hdl/formal/lane.sh with yosys-smtbmc (BMC and k-induction) on
+  // Proved by hdl/formal/prove.sh lane with yosys-smtbmc (BMC and k-induction) on
   // a small instance. The environment is what gbt_voter guarantees: clear
   // and merge only while idle, no push into a full FIFO or while clearing or
   // merging, ranges
@@ -551,7 +551,7 @@ module gbt_vote_lane #(
     assume (!tbl_refs_we_i && !tbl_sizes_we_i);
     // A valid table: every word of the refs memory is a cell of this bank.
     assume (32'(s2_cell) < CellsPerLane);
-    // The FIFO hands out what was pushed (hdl/formal/fifo.sh proves it), so
+    // The FIFO hands out what was pushed (hdl/formal/prove.sh fifo proves it), so
     // its head is a range that was assumed valid on the way in.
     if (!fifo_empty) assume (head_count != '0 && 32'(head_begin) + 32'(head_count) <= RefsPerLane);
     // The readback port's contract.

@@ -433,7 +433,7 @@ module gbt_voter #(
 `endif
 
 `ifdef FORMAL
-  // Proved by hdl/formal/voter.sh with yosys-smtbmc on a small instance,
+  // Proved by hdl/formal/prove.sh voter1 and voter2 with yosys-smtbmc on a small instance,
   // together with each lane's proof (gbt_vote_lane: its environment becomes
   // an obligation here) and EveryFeatureCounted above. Assumed: a loaded,
   // valid table that is not rewritten, and ROI inputs that hold still.

@@ -2,6 +2,7 @@
 
 #include <array>
 
+#include "gabarit/assert.hpp"
 #include "gabarit/deterministic_math.hpp"
 
 namespace gabarit {
@@ -61,6 +62,7 @@ bool valid(const RecoveryOptions& o) noexcept {
 
 Status RecoverySearch::run(const ImageView& image, const RecoveryOptions& options, const LastSighting& last,
                            std::uint16_t screen_depth, SessionScratch scratch, SearchResult& out) noexcept {
+  GABARIT_ASSERT(valid(options));
   out = SearchResult{};
   // Every search_interval-th lost frame searches; the others only report lost.
   if (lost_frames_++ % options.interval != 0) return Status::kOk;

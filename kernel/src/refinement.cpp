@@ -1,5 +1,7 @@
 #include "gabarit/refinement.hpp"
 
+#include "gabarit/assert.hpp"
+
 namespace gabarit {
 namespace {
 
@@ -22,6 +24,7 @@ float spacing(const Axis& a) noexcept { return a.cells > 1 ? (a.max - a.min) / s
 }  // namespace
 
 SubCellOffset refine_within_cell(const TableView& table, std::span<const VoteCounter> counters, std::uint32_t cell) noexcept {
+  GABARIT_ASSERT(cell < table.cell_count() && counters.size() == voter_counter_count(table.cell_count()));
   const Axis ax = table.axis_x(), ay = table.axis_y(), at = table.axis_theta();
   // index = ((depth * theta_cells + i_theta) * y_cells + i_y) * x_cells + i_x
   const std::uint32_t ix = cell % ax.cells;

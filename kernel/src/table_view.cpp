@@ -2,6 +2,7 @@
 
 #include <cstring>
 
+#include "gabarit/assert.hpp"
 #include "gabarit/crc32.hpp"
 #include "gabarit/deterministic_math.hpp"
 
@@ -197,6 +198,7 @@ Status TableView::open(std::span<const std::byte> bytes, TableView& out) noexcep
 }
 
 CellBounds TableView::cell(std::uint32_t cell) const noexcept {
+  GABARIT_ASSERT(cell < cell_count_);
   const std::byte* d = cells_ + std::size_t{cell} * table_format::kCellDescriptorBytes;
   CellBounds c;
   c.x_lo = load_le<float>(d + coff::kXLo);
@@ -211,6 +213,7 @@ CellBounds TableView::cell(std::uint32_t cell) const noexcept {
 }
 
 std::uint32_t TableView::reference(std::uint32_t index) const noexcept {
+  GABARIT_ASSERT(index < reference_count_);
   switch (reference_bytes_) {
     case 1: return load_le<std::uint8_t>(references_ + index);
     case 2: return load_le<std::uint16_t>(references_ + std::size_t{index} * 2);

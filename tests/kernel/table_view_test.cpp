@@ -51,6 +51,21 @@ TEST(TableView, OpensAWellFormedTableAndReadsItBack) {
   }
 }
 
+// Documented preconditions are checked where GABARIT_ASSERTS is on (the dev
+// preset): a cell index past the end stops the program instead of reading
+// past the descriptors.
+TEST(TableViewDeathTest, APreconditionBrokenInADevBuildStopsTheProgram) {
+#if defined(GABARIT_ASSERTS_ENABLED) && GABARIT_ASSERTS_ENABLED
+  const auto bytes = small_table();
+  const TableView t = testing::open_table(bytes);
+  EXPECT_EQ(t.cell(t.cell_count() - 1).depth, 0);
+  EXPECT_DEATH(static_cast<void>(t.cell(t.cell_count())), "");
+  EXPECT_DEATH(static_cast<void>(t.reference(t.reference_count())), "");
+#else
+  GTEST_SKIP() << "GABARIT_ASSERTS is off in this build";
+#endif
+}
+
 TEST(TableView, ReadsAtAnyAlignment) {
   const auto bytes = small_table();
   for (std::size_t shift = 1; shift < 8; ++shift) {

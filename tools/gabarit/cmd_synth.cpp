@@ -56,7 +56,7 @@ int synth(const std::vector<std::string>& argv) {
              {"--depths", "N", "--scene: focus-stack depths of the tilted object, 1..32 (default 1)"},
              {"--occlusion", "START:FRAMES", "--scene: frames hidden behind another photograph (default 100:18; 0:0 none)"},
              {"--points", "N", "approximate point count for random (default 194) and photo: (default 2800)"},
-             {"--frames", "N", "frame count (default 100)"},
+             {"--frames", "N", "frame count (default 100; --scene: 240)"},
              {"--max-step", "PX", "largest displacement per axis and frame (default 4)"},
              {"--noise", "P", "salt-and-pepper rate in [0,1] (default 0)"},
              {"--seed", "S", "seed (default 1)"},

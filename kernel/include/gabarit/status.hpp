@@ -1,5 +1,8 @@
-// The kernel's one error model: every fallible entry point returns a Status
-// (or a Result<T>), and the compiler refuses to let a caller ignore it.
+// The kernel's one error model: every fallible entry point returns a Status,
+// results go to an out-parameter the caller owns (so the caller also owns
+// their storage), and the compiler refuses to let a caller ignore a Status.
+// Programming errors (broken documented preconditions) are GABARIT_ASSERTs
+// (assert.hpp), not Status values.
 #pragma once
 
 #include <cstdint>
@@ -29,24 +32,6 @@ enum class [[nodiscard]] Status : std::uint8_t {
 
 // A short stable name such as "bad-checksum" (for logs and CLI messages).
 const char* status_name(Status status) noexcept;
-
-// A value or the reason there is none. T must be default-constructible and
-// trivially copyable: the kernel has no exceptions to report a failed copy.
-template <class T>
-class [[nodiscard]] Result {
- public:
-  constexpr Result(Status status) noexcept : status_(status) {}  // NOLINT: implicit by design
-  constexpr Result(const T& value) noexcept : value_(value), status_(Status::kOk) {}  // NOLINT
-
-  constexpr bool ok() const noexcept { return status_ == Status::kOk; }
-  constexpr Status status() const noexcept { return status_; }
-  // Only meaningful when ok(); otherwise a default-constructed T.
-  constexpr const T& value() const noexcept { return value_; }
-
- private:
-  T value_{};
-  Status status_;
-};
 
 }  // namespace gabarit
 

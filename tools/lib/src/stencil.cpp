@@ -75,8 +75,4 @@ std::vector<Point> translate_sweep(const std::vector<Point>& arcs, const CellBou
   return out;
 }
 
-std::vector<Point> stencil(const std::vector<Point>& points, const CellBounds& cell) {
-  return translate_sweep(swept_arcs(points, cell.theta_lo_deg, cell.theta_hi_deg), cell);
-}
-
 }  // namespace gabarit::host

@@ -50,7 +50,7 @@ struct ImageModelOptions {
 ModelStack model_from_images(const std::vector<std::string>& paths, const ImageModelOptions& options);
 
 // The default gradient threshold: a quarter of the image's strongest Sobel
-// magnitude (at least 1). Documented in docs/cli.md.
+// magnitude (at least 1). Documented in docs/tracking.md ("Detectors").
 std::uint16_t default_gradient_threshold(std::uint16_t strongest_magnitude);
 
 }  // namespace gabarit::host

@@ -5,7 +5,8 @@
 //              shared counters (no two threads write the same counter). Each
 //              thread still reads every feature's list up to its range (a
 //              binary search per list), so with lists of ~100 references the
-//              saved work barely pays for the search (measured 1.05x on 2 cores).
+//              saved work does not pay for the search (0.8-1.0x on 2 cores,
+//              docs/tracking.md).
 //   kFeatures  the features are split; each thread votes into its own
 //              counters, then the caller adds them with the same saturation
 //              (min(a + b, 65535) is the saturated total, since each part is

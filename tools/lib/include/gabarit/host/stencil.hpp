@@ -45,9 +45,4 @@ std::vector<Point> swept_arcs(const std::vector<Point>& points, float theta_lo_d
 std::vector<Point> translate_sweep(const std::vector<Point>& arcs, const CellBounds& cell,
                                    TranslationPolicy policy = TranslationPolicy::kInsideElseClosest);
 
-// Steps 1 and 2: the stencil of `cell` for `points` (the features of the
-// cell's depth), sorted by (x, y) and without duplicates. The table builder
-// computes step 1 once per (depth, theta cell) and step 2 per cell.
-std::vector<Point> stencil(const std::vector<Point>& points, const CellBounds& cell);
-
 }  // namespace gabarit::host
