@@ -29,6 +29,15 @@ constexpr Field kFields[] = {
     {"features", 40, 4},  {"features_dropped", 44, 4}, {"votes", 48, 8},
 };
 
+// The session's fields after the vote's record.
+constexpr Field kSessionFields[] = {
+    {"session_x", kRecordBytes + 0, 4},      {"session_y", kRecordBytes + 4, 4},
+    {"session_theta_deg", kRecordBytes + 8, 4}, {"session_depth", kRecordBytes + 12, 2},
+    {"confidence", kRecordBytes + 14, 1},    {"session_state", kRecordBytes + 15, 1},
+    {"session_score", kRecordBytes + 16, 4}, {"reacquired", kRecordBytes + 20, 1},
+    {"searched_coarse", kRecordBytes + 21, 1},
+};
+
 std::uint64_t load_field(const std::byte* record, const Field& f) noexcept {
   switch (f.size) {
     case 1: return std::to_integer<std::uint64_t>(record[f.offset]);
@@ -36,6 +45,24 @@ std::uint64_t load_field(const std::byte* record, const Field& f) noexcept {
     case 4: return load_le<std::uint32_t>(record + f.offset);
     default: return load_le<std::uint64_t>(record + f.offset);
   }
+}
+
+// The first field where two records differ, or false.
+template <std::size_t N>
+bool first_difference(const std::byte* expected, const std::byte* actual, const Field (&fields)[N], std::uint32_t frame,
+                      Report& report) noexcept {
+  for (const Field& f : fields) {
+    const std::uint64_t want = load_field(expected, f), got = load_field(actual, f);
+    if (want != got) {
+      report.match = false;
+      report.frame = frame;
+      report.field = f.name;
+      report.expected = want;
+      report.actual = got;
+      return true;
+    }
+  }
+  return false;
 }
 
 }  // namespace
@@ -107,6 +134,125 @@ void encode_record(const StepResult& step, std::span<std::byte, kRecordBytes> ou
   store_le<std::uint64_t>(p + 48, step.votes);
 }
 
+Status open_session_vectors(std::span<const std::byte> bytes, SessionVectorSet& out) noexcept {
+  if (bytes.size() < kSessionHeaderBytes + kTrailerBytes) return Status::kTruncated;
+  if (std::memcmp(bytes.data(), kSessionMagic, sizeof(kSessionMagic)) != 0) return Status::kBadMagic;
+  const std::byte* p = bytes.data();
+  SessionVectorSet set;
+  set.frame_count = load_le<std::uint32_t>(p + 8);
+  set.width = load_le<std::uint32_t>(p + 12);
+  set.height = load_le<std::uint32_t>(p + 16);
+  const std::uint8_t kind = std::to_integer<std::uint8_t>(p[20]);
+  const std::uint8_t flags = std::to_integer<std::uint8_t>(p[21]);
+  set.detector.threshold = load_le<std::uint16_t>(p + 22);
+  set.init = {load_le<float>(p + 24), load_le<float>(p + 28), load_le<float>(p + 32), load_le<std::uint16_t>(p + 36)};
+  set.stack_depths = load_le<std::uint16_t>(p + 38);
+  set.stack_width = load_le<std::uint32_t>(p + 40);
+  set.stack_height = load_le<std::uint32_t>(p + 44);
+  set.stack_ref_x = load_le<float>(p + 48);
+  set.stack_ref_y = load_le<float>(p + 52);
+  set.stack_step = load_le<std::uint32_t>(p + 56);
+  set.options = kPlainSession;
+  set.options.motion_filter = (flags & 1u) != 0;
+  set.options.refine = (flags & 2u) != 0;
+  set.options.recover = (flags & 4u) != 0;
+  set.options.recovery.turn_deg = load_le<float>(p + 60);
+  set.options.recovery.budget = load_le<std::uint32_t>(p + 64);
+  set.options.recovery.interval = load_le<std::uint32_t>(p + 68);
+  set.options.recovery.screen_stride = load_le<std::uint32_t>(p + 72);
+  const bool stack_ok = set.stack_depths == 0 ||
+                        (set.stack_depths <= kMaxStackDepths && set.stack_width > 0 && set.stack_width <= 8192 &&
+                         set.stack_height > 0 && set.stack_height <= 8192);
+  if (set.frame_count == 0 || set.frame_count > 100000 || set.width == 0 || set.width > 8192 || set.height == 0 ||
+      set.height > 8192 || kind > static_cast<std::uint8_t>(table_format::DetectorKind::kCanny) || (flags & ~7u) != 0 ||
+      !stack_ok || !valid(set.options.recovery) || load_le<std::uint32_t>(p + 76) != 0) {
+    return Status::kBadHeaderField;
+  }
+  set.detector.kind = static_cast<table_format::DetectorKind>(kind);
+  const std::size_t size =
+      session_file_bytes(set.frame_count, set.width, set.height, set.stack_depths, set.stack_width, set.stack_height);
+  if (bytes.size() < size) return Status::kTruncated;
+  if (bytes.size() != size) return Status::kSizeMismatch;
+  const std::size_t body = size - kTrailerBytes;
+  if (crc32(bytes.first(body)) != load_le<std::uint32_t>(p + body)) return Status::kBadChecksum;
+  const std::size_t stack = std::size_t{set.stack_depths} * set.stack_width * set.stack_height;
+  const std::size_t pixels = std::size_t{set.frame_count} * set.width * set.height;
+  set.stack = bytes.subspan(kSessionHeaderBytes, stack);
+  set.frames = bytes.subspan(kSessionHeaderBytes + stack, pixels);
+  set.expected = bytes.subspan(kSessionHeaderBytes + stack + pixels, std::size_t{set.frame_count} * kSessionRecordBytes);
+  out = set;
+  return Status::kOk;
+}
+
+void encode_session_header(const SessionVectorSet& set, std::span<std::byte, kSessionHeaderBytes> out) noexcept {
+  std::byte* p = out.data();
+  std::memset(p, 0, kSessionHeaderBytes);
+  std::memcpy(p, kSessionMagic, sizeof(kSessionMagic));
+  store_le<std::uint32_t>(p + 8, set.frame_count);
+  store_le<std::uint32_t>(p + 12, set.width);
+  store_le<std::uint32_t>(p + 16, set.height);
+  p[20] = static_cast<std::byte>(set.detector.kind);
+  p[21] = static_cast<std::byte>((set.options.motion_filter ? 1u : 0u) | (set.options.refine ? 2u : 0u) |
+                                 (set.options.recover ? 4u : 0u));
+  store_le<std::uint16_t>(p + 22, set.detector.threshold);
+  store_le<float>(p + 24, set.init.x);
+  store_le<float>(p + 28, set.init.y);
+  store_le<float>(p + 32, set.init.theta_deg);
+  store_le<std::uint16_t>(p + 36, set.init.depth);
+  store_le<std::uint16_t>(p + 38, set.stack_depths);
+  store_le<std::uint32_t>(p + 40, set.stack_width);
+  store_le<std::uint32_t>(p + 44, set.stack_height);
+  store_le<float>(p + 48, set.stack_ref_x);
+  store_le<float>(p + 52, set.stack_ref_y);
+  store_le<std::uint32_t>(p + 56, set.stack_step);
+  store_le<float>(p + 60, set.options.recovery.turn_deg);
+  store_le<std::uint32_t>(p + 64, set.options.recovery.budget);
+  store_le<std::uint32_t>(p + 68, set.options.recovery.interval);
+  store_le<std::uint32_t>(p + 72, set.options.recovery.screen_stride);
+}
+
+void encode_session_record(const SessionResult& r, std::span<std::byte, kSessionRecordBytes> out) noexcept {
+  std::byte* p = out.data();
+  std::memset(p, 0, kSessionRecordBytes);
+  encode_record(r.step, out.first<kRecordBytes>());
+  p += kRecordBytes;
+  store_le<std::uint32_t>(p + 0, float_bits(r.pose.x));
+  store_le<std::uint32_t>(p + 4, float_bits(r.pose.y));
+  store_le<std::uint32_t>(p + 8, float_bits(r.pose.theta_deg));
+  store_le<std::uint16_t>(p + 12, r.pose.depth);
+  p[14] = static_cast<std::byte>(r.confidence);
+  p[15] = static_cast<std::byte>(r.state);
+  store_le<std::uint32_t>(p + 16, float_bits(r.score));
+  p[20] = static_cast<std::byte>(r.reacquired ? 1 : 0);
+  p[21] = static_cast<std::byte>(r.searched_coarse ? 1 : 0);
+}
+
+Status check_session_vectors(const TableView& table, const SessionVectorSet& set, SessionScratch scratch,
+                             std::span<ImageView> stack_views, Report& report) noexcept {
+  report = Report{};
+  if (stack_views.size() < set.stack_depths) return Status::kBufferTooSmall;
+  TrackingSession session(table, nullptr, set.detector);
+  GABARIT_TRY(session.start(set.options, set.init));
+  FocusStack stack;
+  if (set.stack_depths > 0) {
+    for (std::uint16_t d = 0; d < set.stack_depths; ++d) stack_views[d] = set.stack_image(d);
+    stack = FocusStack{stack_views.first(set.stack_depths), set.stack_ref_x, set.stack_ref_y, set.stack_step};
+    session.use_focus_stack(&stack);
+  }
+  for (std::uint32_t i = 0; i < set.frame_count; ++i) {
+    SessionResult result;
+    GABARIT_TRY(session.step(set.frame(i), scratch, result));
+    std::byte actual[kSessionRecordBytes];
+    encode_session_record(result, std::span<std::byte, kSessionRecordBytes>(actual));
+    const std::byte* expected = set.expected.data() + std::size_t{i} * kSessionRecordBytes;
+    if (first_difference(expected, actual, kFields, i, report) || first_difference(expected, actual, kSessionFields, i, report)) {
+      return Status::kOk;
+    }
+    report.frames_checked = i + 1;
+  }
+  return Status::kOk;
+}
+
 Status check_vectors(const TableView& table, const VectorSet& set, TrackerScratch scratch, Report& report) noexcept {
   report = Report{};
   Pose pose = set.init;
@@ -116,17 +262,7 @@ Status check_vectors(const TableView& table, const VectorSet& set, TrackerScratc
     std::byte actual[kRecordBytes];
     encode_record(step, std::span<std::byte, kRecordBytes>(actual));
     const std::byte* expected = set.expected.data() + std::size_t{i} * kRecordBytes;
-    for (const Field& f : kFields) {
-      const std::uint64_t want = load_field(expected, f), got = load_field(actual, f);
-      if (want != got) {
-        report.match = false;
-        report.frame = i;
-        report.field = f.name;
-        report.expected = want;
-        report.actual = got;
-        return Status::kOk;
-      }
-    }
+    if (first_difference(expected, actual, kFields, i, report)) return Status::kOk;
     report.frames_checked = i + 1;
     pose = step.pose;
   }

@@ -1,6 +1,8 @@
 // The firmware's application: validate the table linked into flash once,
-// then replay the embedded test vectors through the kernel's tracker and
-// report whether every pose and vote count is bit-identical to the host's.
+// then replay the embedded test vectors through the kernel's tracker (or the
+// session vectors through a TrackingSession: motion filter, refinement,
+// recovery, depth and angle by intensity) and report whether every pose and
+// vote count is bit-identical to the host's.
 // All buffers are static and sized by the kernel's constexpr functions for
 // the largest table this firmware accepts; a bigger table is refused at
 // start-up, never overrun.
@@ -17,6 +19,7 @@
 extern "C" {
 extern const std::byte gabarit_table[], gabarit_table_end[];
 extern const std::byte gabarit_vectors[], gabarit_vectors_end[];
+extern const std::byte gabarit_session[], gabarit_session_end[];
 }
 
 namespace {
@@ -37,6 +40,8 @@ constexpr std::size_t kMaskBytes = gabarit::tracker_mask_bytes(kMaxRoiSide, kMax
 gabarit::RoiPoint g_features[kFeatureCapacity];
 gabarit::VoteCounter g_counters[gabarit::voter_counter_count(kMaxCells)];
 std::uint8_t g_roi_mask[kMaskBytes];
+// The session vectors' focus stack: views of images in flash.
+gabarit::ImageView g_stack_views[gabarit::vectors::kMaxStackDepths];
 
 std::span<const std::byte> between(const std::byte* begin, const std::byte* end) {
   return {begin, static_cast<std::size_t>(end - begin)};
@@ -45,6 +50,13 @@ std::span<const std::byte> between(const std::byte* begin, const std::byte* end)
 int fail(const char* what, gabarit::Status status) {
   Line line;
   console_write(line.text("FAIL: ").text(what).text(": ").text(gabarit::status_name(status)));
+  return 1;
+}
+
+int mismatch(const char* what, const gabarit::vectors::Report& report) {
+  Line line;
+  console_write(line.text("FAIL: ").text(what).text(" frame ").dec(std::uint64_t{report.frame}).text(" field ")
+                    .text(report.field).text(": expected ").hex(report.expected).text(", got ").hex(report.actual));
   return 1;
 }
 
@@ -72,25 +84,41 @@ extern "C" int app_main() {
                     .dec(std::uint64_t{table.reference_count()}).text(" references, ")
                     .dec(static_cast<std::uint64_t>(gabarit_table_end - gabarit_table)).text(" bytes in flash"));
 
-  gabarit::vectors::VectorSet set;
-  if (const auto s = gabarit::vectors::open_vectors(between(gabarit_vectors, gabarit_vectors_end), set); s != gabarit::Status::kOk)
-    return fail("vectors", s);
-
   gabarit::TrackerScratch scratch;
   scratch.features = g_features;
   scratch.counters = std::span<gabarit::VoteCounter>(g_counters, gabarit::voter_counter_count(table.cell_count()));
   scratch.roi_mask = g_roi_mask;
   gabarit::vectors::Report report;
-  if (const auto s = gabarit::vectors::check_vectors(table, set, scratch, report); s != gabarit::Status::kOk)
-    return fail("track_step", s);
-  Line result;
-  if (!report.match) {
-    console_write(result.text("FAIL: frame ").dec(std::uint64_t{report.frame}).text(" field ").text(report.field)
-                      .text(": expected ").hex(report.expected).text(", got ").hex(report.actual));
-    return 1;
+
+  if (gabarit_vectors_end != gabarit_vectors) {
+    gabarit::vectors::VectorSet set;
+    if (const auto s = gabarit::vectors::open_vectors(between(gabarit_vectors, gabarit_vectors_end), set); s != gabarit::Status::kOk)
+      return fail("vectors", s);
+    if (const auto s = gabarit::vectors::check_vectors(table, set, scratch, report); s != gabarit::Status::kOk)
+      return fail("track_step", s);
+    if (!report.match) return mismatch("vectors", report);
+    Line result;
+    console_write(result.text("PASS: ").dec(std::uint64_t{report.frames_checked}).text(" frames ")
+                      .dec(std::uint64_t{set.width}).text("x").dec(std::uint64_t{set.height})
+                      .text(", poses and votes bit-identical to the host"));
   }
-  console_write(result.text("PASS: ").dec(std::uint64_t{report.frames_checked}).text(" frames ")
-                    .dec(std::uint64_t{set.width}).text("x").dec(std::uint64_t{set.height})
-                    .text(", poses and votes bit-identical to the host"));
+  if (gabarit_session_end != gabarit_session) {
+    gabarit::vectors::SessionVectorSet set;
+    if (const auto s = gabarit::vectors::open_session_vectors(between(gabarit_session, gabarit_session_end), set);
+        s != gabarit::Status::kOk)
+      return fail("session vectors", s);
+    // Each recovery placement a full track_step: no shared search features
+    // (the mode the session vectors were recorded in, and the one a part
+    // short of RAM runs).
+    if (const auto s = gabarit::vectors::check_session_vectors(table, set, {scratch, {}, {}}, g_stack_views, report);
+        s != gabarit::Status::kOk)
+      return fail("session", s);
+    if (!report.match) return mismatch("session", report);
+    Line result;
+    console_write(result.text("PASS: session, ").dec(std::uint64_t{report.frames_checked}).text(" frames ")
+                      .dec(std::uint64_t{set.width}).text("x").dec(std::uint64_t{set.height}).text(" with ")
+                      .dec(std::uint64_t{set.stack_depths})
+                      .text(" focus-stack images: poses, confidence and votes bit-identical to the host"));
+  }
   return 0;
 }

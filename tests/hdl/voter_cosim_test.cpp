@@ -2,9 +2,11 @@
 // and 4 lanes) against the C++ kernel, the golden model: random tables and
 // feature streams with random valid gaps, frames of the tracker's synthetic
 // sequences, saturation, and the ROI and capacity flags. Every counter, the
-// best cell, the runner-up and the counts must match bit for bit. A mismatch
-// prints the table seed, frame, cycle and first difference, and re-runs that
-// frame with an FST waveform written next to the test binary.
+// best cell, the runner-up and the counts must match bit for bit. The random
+// part runs to the end whatever it finds and reports every mismatching frame
+// (table seed, frame, cycle, every differing field; the first ten in full)
+// and their count, then re-runs the first with an FST waveform written next
+// to the test binary.
 //
 // GABARIT_COSIM_TABLES / GABARIT_COSIM_FRAMES scale the random part (the
 // nightly-style target `hdl-cosim-long` sets them high).
@@ -80,11 +82,11 @@ template <class Model>
 void random_cosim(const char* model, std::uint32_t lanes) {
   const std::size_t tables = env_count("GABARIT_COSIM_TABLES", 110);
   const std::size_t frames = env_count("GABARIT_COSIM_FRAMES", 3);
-  std::uint64_t features = 0, votes = 0;
-  std::optional<Failure> failure;
+  std::uint64_t features = 0, votes = 0, frames_run = 0, mismatches = 0;
+  std::optional<Failure> failure;  // the first mismatch
   {
     Harness<Model> h;
-    for (std::size_t i = 0; i < tables && !failure; ++i) {
+    for (std::size_t i = 0; i < tables; ++i) {
       RandomTable t = random_table(1000 + i);
       h.load(host::hdl_layout(t.view, lanes), lanes);
       host::Rng rng(t.seed * 7 + lanes);
@@ -97,11 +99,13 @@ void random_cosim(const char* model, std::uint32_t lanes) {
         const Outcome hw = h.frame(f, t.view.cell_count(), gap, valid_rng);
         const Outcome sw = kernel_outcome(t.view, f);
         const std::string diff = compare(hw, sw);
+        ++frames_run;
         if (!diff.empty()) {
-          ADD_FAILURE() << model << ": table seed " << t.seed << " (" << t.view.cell_count() << " cells), frame " << fr << " of "
-                        << f.size() << " features, ending at cycle " << h.cycle() << ": " << diff;
-          failure = Failure{std::move(t), f, gap, frame_seed};
-          break;
+          if (++mismatches <= 10) {
+            ADD_FAILURE() << model << ": table seed " << t.seed << " (" << t.view.cell_count() << " cells), frame " << fr << " of "
+                          << f.size() << " features, ending at cycle " << h.cycle() << ": " << diff;
+          }
+          if (!failure) failure = Failure{t, f, gap, frame_seed};
         }
         features += f.size();
         votes += sw.votes;
@@ -111,7 +115,9 @@ void random_cosim(const char* model, std::uint32_t lanes) {
   // One live model at a time: Verilator 5.006 can deadlock destroying a
   // second model while another exists, so the traced replay comes after.
   if (failure) {
-    if (TableView::open(failure->table.bytes, failure->table.view) != Status::kOk) std::abort();  // bytes moved
+    ADD_FAILURE() << model << ": " << mismatches << " of " << frames_run << " frames mismatched; the first is table seed "
+                  << failure->table.seed;
+    if (TableView::open(failure->table.bytes, failure->table.view) != Status::kOk) std::abort();  // bytes copied
     replay_with_trace<Model>(model, failure->table, lanes, failure->features, failure->gap, failure->frame_seed);
     return;
   }

@@ -77,21 +77,31 @@ inline std::vector<RoiPoint> trial_features(const TableView& t, const app::GrayI
 }
 
 // First difference between hardware and kernel, or empty.
+// Every difference between the hardware's outcome and the kernel's, "" when
+// they agree: how many counters differ (and the first), then the best cell,
+// the runner-up and the counts, each that differs.
 inline std::string compare(const Outcome& hw, const Outcome& sw) {
   std::ostringstream o;
+  const auto next = [&] { return o.tellp() > 0 ? "; " : ""; };
+  std::size_t differing = 0, first = 0;
   for (std::size_t c = 0; c < sw.counters.size(); ++c) {
-    if (hw.counters[c] != sw.counters[c]) {
-      o << "counter of cell " << c << ": hardware " << hw.counters[c] << ", kernel " << sw.counters[c];
-      return o.str();
-    }
+    if (hw.counters[c] != sw.counters[c] && differing++ == 0) first = c;
+  }
+  if (differing > 0) {
+    o << differing << " counter(s) differ, first cell " << first << ": hardware " << hw.counters[first] << ", kernel "
+      << sw.counters[first];
   }
   if (hw.best_cell != sw.best_cell || hw.best_votes != sw.best_votes) {
-    o << "best: hardware cell " << hw.best_cell << " (" << hw.best_votes << "), kernel " << sw.best_cell << " (" << sw.best_votes << ")";
-  } else if (hw.runner_cell != sw.runner_cell || hw.runner_votes != sw.runner_votes) {
-    o << "runner-up: hardware cell " << hw.runner_cell << " (" << hw.runner_votes << "), kernel " << sw.runner_cell << " ("
-      << sw.runner_votes << ")";
-  } else if (hw.votes != sw.votes || hw.features != sw.features) {
-    o << "counts: hardware " << hw.votes << " votes / " << hw.features << " features, kernel " << sw.votes << " / " << sw.features;
+    o << next() << "best: hardware cell " << hw.best_cell << " (" << hw.best_votes << "), kernel " << sw.best_cell << " ("
+      << sw.best_votes << ")";
+  }
+  if (hw.runner_cell != sw.runner_cell || hw.runner_votes != sw.runner_votes) {
+    o << next() << "runner-up: hardware cell " << hw.runner_cell << " (" << hw.runner_votes << "), kernel " << sw.runner_cell
+      << " (" << sw.runner_votes << ")";
+  }
+  if (hw.votes != sw.votes || hw.features != sw.features) {
+    o << next() << "counts: hardware " << hw.votes << " votes / " << hw.features << " features, kernel " << sw.votes << " / "
+      << sw.features;
   }
   return o.str();
 }

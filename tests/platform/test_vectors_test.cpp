@@ -41,7 +41,10 @@ class TestVectors : public ::testing::Test {
     o.depths = 2;
     o.frames = 4;
     o.keep = 0.5;
-    host::write_test_vectors(o, (dir_ / "a").string());
+    o.session_frames = 14;
+    o.hidden_from = 3;
+    o.hidden_frames = 8;
+    summary_ = host::write_test_vectors(o, (dir_ / "a").string());
     host::write_test_vectors(o, (dir_ / "b").string());
   }
   static void TearDownTestSuite() { std::filesystem::remove_all(dir_); }
@@ -59,12 +62,74 @@ class TestVectors : public ::testing::Test {
     return vectors::check_vectors(table, set, buffers.scratch(), report);
   }
 
+  // Replays session `file` on the host against table a/table.gbt.
+  static Status replay_session(const std::vector<std::byte>& file, vectors::Report& report) {
+    const std::vector<std::byte> table_bytes = read_bytes(dir_ / "a" / "table.gbt");
+    std::vector<std::uint64_t> aligned((table_bytes.size() + 7) / 8);
+    std::memcpy(aligned.data(), table_bytes.data(), table_bytes.size());
+    TableView table;
+    EXPECT_EQ(TableView::open({reinterpret_cast<const std::byte*>(aligned.data()), table_bytes.size()}, table), Status::kOk);
+    vectors::SessionVectorSet set;
+    GABARIT_TRY(vectors::open_session_vectors(file, set));
+    app::TrackerBuffers buffers(table, app::VoterChoice::kCsr);
+    std::vector<ImageView> stack(set.stack_depths);
+    return vectors::check_session_vectors(table, set, {buffers.scratch(), {}, {}}, stack, report);
+  }
+
   static inline std::filesystem::path dir_;
+  static inline host::VectorSceneSummary summary_;
 };
 
 TEST_F(TestVectors, SameOptionsWriteTheSameBytes) {
   EXPECT_EQ(read_bytes(dir_ / "a" / "table.gbt"), read_bytes(dir_ / "b" / "table.gbt"));
   EXPECT_EQ(read_bytes(dir_ / "a" / "vectors.gbv"), read_bytes(dir_ / "b" / "vectors.gbv"));
+  EXPECT_EQ(read_bytes(dir_ / "a" / "session.gbs"), read_bytes(dir_ / "b" / "session.gbs"));
+}
+
+// The session's sequence exercises what the session adds: the target is
+// hidden long enough to be lost, and found again.
+TEST_F(TestVectors, TheSessionReplaysExactlyThroughALostPeriod) {
+  EXPECT_GT(summary_.session_lost_frames, 0u);
+  EXPECT_TRUE(summary_.session_reacquired);
+  vectors::Report report;
+  ASSERT_EQ(replay_session(read_bytes(dir_ / "a" / "session.gbs"), report), Status::kOk);
+  EXPECT_TRUE(report.match) << "frame " << report.frame << " field " << report.field;
+  EXPECT_EQ(report.frames_checked, 14u);
+}
+
+TEST_F(TestVectors, ADifferentSessionResultIsReportedWithFrameAndField) {
+  std::vector<std::byte> file = read_bytes(dir_ / "a" / "session.gbs");
+  vectors::SessionVectorSet set;
+  ASSERT_EQ(vectors::open_session_vectors(file, set), Status::kOk);
+  // Frame 1's session pose x (after the vote's record), one ulp off.
+  const std::size_t at = static_cast<std::size_t>(set.expected.data() - file.data()) + vectors::kSessionRecordBytes +
+                         vectors::kRecordBytes;
+  store_le<std::uint32_t>(file.data() + at, load_le<std::uint32_t>(file.data() + at) + 1);
+  reseal(file);
+  vectors::Report report;
+  ASSERT_EQ(replay_session(file, report), Status::kOk);
+  EXPECT_FALSE(report.match);
+  EXPECT_EQ(report.frame, 1u);
+  EXPECT_STREQ(report.field, "session_x");
+  EXPECT_EQ(report.expected, report.actual + 1);
+}
+
+TEST_F(TestVectors, DamagedSessionFilesAreRefused) {
+  const std::vector<std::byte> good = read_bytes(dir_ / "a" / "session.gbs");
+  vectors::SessionVectorSet set;
+  auto flipped = good;
+  flipped[vectors::kSessionHeaderBytes + 10] ^= std::byte{0x01};  // a stack pixel
+  EXPECT_EQ(vectors::open_session_vectors(flipped, set), Status::kBadChecksum);
+  EXPECT_EQ(vectors::open_session_vectors(std::span(good).first(good.size() - 1), set), Status::kTruncated);
+  auto flags = good;
+  flags[21] = std::byte{0x08};  // an unknown option flag
+  reseal(flags);
+  EXPECT_EQ(vectors::open_session_vectors(flags, set), Status::kBadHeaderField);
+  auto interval = good;
+  store_le<std::uint32_t>(interval.data() + 68, 0);  // recovery interval 0
+  reseal(interval);
+  EXPECT_EQ(vectors::open_session_vectors(interval, set), Status::kBadHeaderField);
+  EXPECT_EQ(vectors::open_session_vectors(read_bytes(dir_ / "a" / "vectors.gbv"), set), Status::kBadMagic);
 }
 
 TEST_F(TestVectors, TheHostReplaysItsOwnVectorsExactly) {

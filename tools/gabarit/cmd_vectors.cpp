@@ -10,15 +10,18 @@ namespace gabarit::cli {
 int vectors(const std::vector<std::string>& argv) {
   app::Args args("vectors", "--out DIR [options]",
             "Writes the cross-target test vectors: DIR/table.gbt (a 4-DOF table: x, y +-6 px in 2-px cells,\n"
-            "theta +-3 deg in 2-deg cells, every focus-stack depth) and DIR/vectors.gbv (frames plus the host's\n"
-            "tracking results, docs/file-formats.md). Every target replays them and must match bit for bit.\n"
-            "Same options, same bytes.",
+            "theta +-3 deg in 2-deg cells, every focus-stack depth), DIR/vectors.gbv (frames plus the host's\n"
+            "track_step results) and DIR/session.gbs (a longer sequence with an occlusion, the focus stack and a\n"
+            "TrackingSession's results: motion filter, refinement, recovery, depth and angle by intensity), both in\n"
+            "docs/file-formats.md. Every target replays them and must match bit for bit. Same options, same bytes.",
             {{"--out", "DIR", "output directory", false, true},
              {"--points", "N", "approximate model feature count at depth 0, 100..5000 (default 1000)"},
              {"--depths", "N", "focus-stack depths, 1..16 (default 4)"},
              {"--frames", "N", "frames, 1..1000 (default 8)"},
              {"--keep", "RATIO", "fraction of stencil references kept, (0,1] (default 0.2)"},
              {"--noise", "P", "salt-and-pepper rate in [0,1] (default 0.02)"},
+             {"--session-frames", "N", "frames of the session's sequence, 1..1000 (default 16)"},
+             {"--hidden", "START,FRAMES", "the session's occlusion (default 4,8)"},
              {"--seed", "S", "seed (default 1)"}});
   if (!args.parse(argv)) return 0;
   host::VectorSceneOptions o;
@@ -28,12 +31,22 @@ int vectors(const std::vector<std::string>& argv) {
   o.keep = args.number("--keep", o.keep, 1e-6, 1.0);
   o.noise = args.number("--noise", o.noise, 0.0, 1.0);
   o.seed = static_cast<std::uint64_t>(args.integer("--seed", 1, 0, INT64_MAX));
+  o.session_frames = static_cast<std::uint32_t>(args.integer("--session-frames", o.session_frames, 1, 1000));
+  if (args.has("--hidden")) {
+    const auto hidden = app::parse_number_list(args.get("--hidden"), "--hidden", 2, 2);
+    for (double v : hidden)
+      if (v < 0 || v > 1000 || v != static_cast<double>(static_cast<std::uint32_t>(v)))
+        throw app::UsageError("--hidden '" + args.get("--hidden") + "': want START,FRAMES, whole numbers up to 1000");
+    o.hidden_from = static_cast<std::uint32_t>(hidden[0]);
+    o.hidden_frames = static_cast<std::uint32_t>(hidden[1]);
+  }
   const auto s = host::write_test_vectors(o, args.get("--out"));
   std::fprintf(stderr,
                "%s: %zu-point model x %u depths, %u cells, table %zu bytes; %u frames %ux%u, vectors %zu bytes; "
-               "%u/%u frames on the true pose\n",
+               "%u/%u frames on the true pose; session %u frames, %zu bytes, %u lost, %s\n",
                args.get("--out").c_str(), s.model_points, o.depths, s.cells, s.table_bytes, o.frames, s.width, s.height,
-               s.vector_bytes, s.frames_on_truth, o.frames);
+               s.vector_bytes, s.frames_on_truth, o.frames, o.session_frames, s.session_bytes, s.session_lost_frames,
+               s.session_reacquired ? "reacquired" : "not reacquired");
   return 0;
 }
 

@@ -6,17 +6,18 @@
 #include <set>
 #include <vector>
 
-#include "gabarit/byte_order.hpp"
-#include "gabarit/crc32.hpp"
-#include "gabarit/deterministic_math.hpp"
 #include "gabarit/app/error.hpp"
 #include "gabarit/app/image_io.hpp"
 #include "gabarit/app/mapped_file.hpp"
+#include "gabarit/app/scratch.hpp"
+#include "gabarit/app/test_vectors.hpp"
+#include "gabarit/byte_order.hpp"
+#include "gabarit/crc32.hpp"
+#include "gabarit/deterministic_math.hpp"
 #include "gabarit/host/rng.hpp"
 #include "gabarit/host/synth.hpp"
 #include "gabarit/host/table_builder.hpp"
-#include "gabarit/host/tracking_run.hpp"
-#include "gabarit/app/test_vectors.hpp"
+#include "gabarit/tracking_session.hpp"
 
 namespace gabarit::host {
 namespace {
@@ -40,6 +41,33 @@ std::vector<Point> at_depth(const std::vector<Point>& base, std::uint16_t n) {
   std::set<Point> out;
   for (const Point& p : base) out.insert({round_to_int(s * static_cast<float>(p.x)), round_to_int(s * static_cast<float>(p.y))});
   return {out.begin(), out.end()};
+}
+
+// The model of one depth drawn at a pose into a binary image, with
+// salt-and-pepper noise; hidden: noise only.
+app::GrayImage render(const std::vector<Point>& model, std::uint32_t side, float x, float y, float theta, bool hidden,
+                      double noise, Rng& rng) {
+  app::GrayImage image(side, side, 0);
+  const SinCos sc = sin_cos_deg(theta);
+  for (const Point& m : model) {
+    if (hidden) break;
+    const std::int32_t px = round_to_int(x + sc.cos * static_cast<float>(m.x) - sc.sin * static_cast<float>(m.y));
+    const std::int32_t py = round_to_int(y + sc.sin * static_cast<float>(m.x) + sc.cos * static_cast<float>(m.y));
+    if (px >= 0 && py >= 0 && px < static_cast<std::int32_t>(side) && py < static_cast<std::int32_t>(side))
+      image.at(static_cast<std::uint32_t>(px), static_cast<std::uint32_t>(py)) = 255;
+  }
+  for (auto& v : image.pixels)
+    if (rng.bernoulli(noise)) v = static_cast<std::uint8_t>(255 - v);
+  return image;
+}
+
+// One random step of the trajectory: integer steps within the table's cell
+// centres' reach, angle steps of whole degrees, depth walking by one.
+void walk(Rng& rng, float& x, float& y, float& theta, std::int32_t& depth, std::uint16_t depths) {
+  x += static_cast<float>(rng.uniform_int(-5, 5));
+  y += static_cast<float>(rng.uniform_int(-5, 5));
+  theta += static_cast<float>(rng.uniform_int(-2, 2));
+  depth = std::clamp(depth + rng.uniform_int(-1, 1), 0, static_cast<std::int32_t>(depths) - 1);
 }
 
 }  // namespace
@@ -89,20 +117,8 @@ VectorSceneSummary write_test_vectors(const VectorSceneOptions& o, const std::st
   std::vector<float> true_x, true_y, true_theta;
   std::vector<std::int32_t> true_depth;
   for (std::uint32_t f = 0; f < o.frames; ++f) {
-    x += static_cast<float>(rng.uniform_int(-5, 5));
-    y += static_cast<float>(rng.uniform_int(-5, 5));
-    theta += static_cast<float>(rng.uniform_int(-2, 2));
-    depth = std::clamp(depth + rng.uniform_int(-1, 1), 0, static_cast<std::int32_t>(o.depths) - 1);
-    app::GrayImage image(side, side, 0);
-    const SinCos sc = sin_cos_deg(theta);
-    for (const Point& m : model.depths[static_cast<std::size_t>(depth)]) {
-      const std::int32_t px = round_to_int(x + sc.cos * static_cast<float>(m.x) - sc.sin * static_cast<float>(m.y));
-      const std::int32_t py = round_to_int(y + sc.sin * static_cast<float>(m.x) + sc.cos * static_cast<float>(m.y));
-      if (px >= 0 && py >= 0 && px < static_cast<std::int32_t>(side) && py < static_cast<std::int32_t>(side))
-        image.at(static_cast<std::uint32_t>(px), static_cast<std::uint32_t>(py)) = 255;
-    }
-    for (auto& v : image.pixels)
-      if (rng.bernoulli(o.noise)) v = static_cast<std::uint8_t>(255 - v);
+    walk(rng, x, y, theta, depth, o.depths);
+    const app::GrayImage image = render(model.depths[static_cast<std::size_t>(depth)], side, x, y, theta, false, o.noise, rng);
     std::copy_n(reinterpret_cast<const std::byte*>(image.pixels.data()), image.pixels.size(),
                 file.begin() + static_cast<std::ptrdiff_t>(vectors::kHeaderBytes + std::size_t{f} * side * side));
     true_x.push_back(x);
@@ -133,9 +149,74 @@ VectorSceneSummary write_test_vectors(const VectorSceneOptions& o, const std::st
   const std::size_t body = file.size() - vectors::kTrailerBytes;
   store_le<std::uint32_t>(file.data() + body, crc32(std::span<const std::byte>(file.data(), body)));
 
+  // The session's sequence and focus stack: each depth's model drawn
+  // centred in an image of its own (the reference point at the centre).
+  if (o.session_frames < 1 || o.session_frames > 1000) throw app::Error("vectors: session frames must be in 1..1000");
+  vectors::SessionVectorSet session;
+  session.frame_count = o.session_frames;
+  session.width = session.height = side;
+  session.detector = set.detector;
+  session.init = set.init;
+  session.options = SessionOptions{};
+  session.stack_depths = o.depths;
+  const auto stack_side = static_cast<std::uint32_t>(2 * extent + 1);
+  session.stack_width = session.stack_height = stack_side;
+  session.stack_ref_x = session.stack_ref_y = static_cast<float>(extent);
+  session.stack_step = 2;
+  std::vector<std::byte> session_file(vectors::session_file_bytes(session.frame_count, side, side, session.stack_depths,
+                                                                  stack_side, stack_side));
+  const std::size_t stack_at = vectors::kSessionHeaderBytes;
+  const std::size_t frames_at = stack_at + std::size_t{session.stack_depths} * stack_side * stack_side;
+  const std::size_t session_records_at = frames_at + std::size_t{session.frame_count} * side * side;
+  std::vector<app::GrayImage> stack_images;
+  for (std::uint16_t d = 0; d < session.stack_depths; ++d) {
+    Rng quiet(0);
+    stack_images.push_back(render(model.depths[d], stack_side, static_cast<float>(extent), static_cast<float>(extent), 0.0f,
+                                  false, 0.0, quiet));
+    std::copy_n(reinterpret_cast<const std::byte*>(stack_images.back().pixels.data()), stack_images.back().pixels.size(),
+                session_file.begin() + static_cast<std::ptrdiff_t>(stack_at + std::size_t{d} * stack_side * stack_side));
+  }
+  x = static_cast<float>(side / 2), y = static_cast<float>(side / 2), theta = 0;
+  depth = static_cast<std::int32_t>(o.depths / 2);
+  for (std::uint32_t f = 0; f < session.frame_count; ++f) {
+    walk(rng, x, y, theta, depth, o.depths);
+    const bool hidden = f >= o.hidden_from && f < o.hidden_from + o.hidden_frames;
+    const app::GrayImage image = render(model.depths[static_cast<std::size_t>(depth)], side, x, y, theta, hidden, o.noise, rng);
+    std::copy_n(reinterpret_cast<const std::byte*>(image.pixels.data()), image.pixels.size(),
+                session_file.begin() + static_cast<std::ptrdiff_t>(frames_at + std::size_t{f} * side * side));
+  }
+  {
+    std::vector<ImageView> views;
+    for (const app::GrayImage& image : stack_images) views.push_back(image.view());
+    const FocusStack stack{views, session.stack_ref_x, session.stack_ref_y, session.stack_step};
+    TrackingSession tracker(table, nullptr, session.detector);
+    if (const Status s = tracker.start(session.options, session.init); s != Status::kOk)
+      throw app::Error(std::string("vectors: session start failed: ") + status_name(s));
+    tracker.use_focus_stack(&stack);
+    const SessionScratch scratch{buffers.scratch(), {}, {}};  // each recovery placement a full track_step
+    for (std::uint32_t f = 0; f < session.frame_count; ++f) {
+      const ImageView view{reinterpret_cast<const std::uint8_t*>(session_file.data()) + frames_at + std::size_t{f} * side * side,
+                           side, side, side};
+      SessionResult result;
+      if (const Status s = tracker.step(view, scratch, result); s != Status::kOk)
+        throw app::Error(std::string("vectors: session step failed: ") + status_name(s));
+      vectors::encode_session_record(result, std::span<std::byte, vectors::kSessionRecordBytes>(
+                                                 session_file.data() + session_records_at + std::size_t{f} * vectors::kSessionRecordBytes,
+                                                 vectors::kSessionRecordBytes));
+      summary.session_lost_frames += result.state == TrackState::kLost;
+      summary.session_reacquired = summary.session_reacquired || result.reacquired;
+    }
+  }
+  vectors::encode_session_header(session, std::span<std::byte, vectors::kSessionHeaderBytes>(session_file.data(),
+                                                                                             vectors::kSessionHeaderBytes));
+  const std::size_t session_body = session_file.size() - vectors::kTrailerBytes;
+  store_le<std::uint32_t>(session_file.data() + session_body, crc32(std::span<const std::byte>(session_file.data(), session_body)));
+
   std::filesystem::create_directories(dir);
   app::write_file((std::filesystem::path(dir) / "table.gbt").string(), table_bytes);
   app::write_file((std::filesystem::path(dir) / "vectors.gbv").string(), file);
+  app::write_file((std::filesystem::path(dir) / "session.gbs").string(), session_file);
+  summary.session_bytes = session_file.size();
   summary.model_points = model.depths[0].size();
   summary.table_bytes = table_bytes.size();
   summary.vector_bytes = file.size();

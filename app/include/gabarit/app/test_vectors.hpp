@@ -1,7 +1,12 @@
-// Cross-target test vectors: one file, produced on the host by
-// `gabarit vectors`, that every target (x86-64, aarch64 and armhf under
-// qemu-user, Cortex-M under qemu-system-arm) replays through track_step and
-// must reproduce bit for bit: poses, vote counts, best and runner-up cells.
+// Cross-target test vectors: files produced on the host by `gabarit vectors`,
+// that every target (x86-64, aarch64 and armhf under qemu-user, Cortex-M
+// under qemu-system-arm) replays and must reproduce bit for bit:
+//   vectors.gbv  track_step frame after frame: poses, vote counts, best and
+//                runner-up cells;
+//   session.gbs  a TrackingSession (motion filter, refinement, recovery,
+//                depth and angle by intensity) over a sequence with an
+//                occlusion: the session's pose, confidence, state and score,
+//                and the vote it searched (the format below).
 //
 // Like the kernel this reader never allocates, so the same code runs in the
 // firmware on a const array in flash and on the host on a mapped file.
@@ -23,6 +28,7 @@
 #include "gabarit/status.hpp"
 #include "gabarit/table_view.hpp"
 #include "gabarit/tracker.hpp"
+#include "gabarit/tracking_session.hpp"
 
 namespace gabarit::vectors {
 
@@ -77,5 +83,73 @@ struct Report {
 // Status errors are the tracker's (e.g. short scratch); a mismatch is not an
 // error but is described in `report`.
 Status check_vectors(const TableView& table, const VectorSet& set, TrackerScratch scratch, Report& report) noexcept;
+
+// ---------------------------------------------------------------------------
+// Session vectors (docs/file-formats.md), little-endian:
+//   header   80 bytes  magic "GBSESS01", u32 frame_count, u32 width, u32 height,
+//                      u8 detector kind, u8 flags (1 motion filter, 2 refine,
+//                      4 recover), u16 detector threshold, f32 init x, y,
+//                      theta_deg, u16 init depth, u16 stack depth count (0:
+//                      no focus stack), u32 stack width, u32 stack height,
+//                      f32 stack ref x, f32 stack ref y, u32 stack step,
+//                      f32 recovery turn_deg, u32 budget, u32 interval,
+//                      u32 screen_stride, 4 zero bytes
+//   stack    depth count * stack width * stack height bytes, 8-bit
+//   frames   frame_count * width * height bytes
+//   expected frame_count records of kSessionRecordBytes: the vote's record
+//            (encode_record), then f32 pose x, y, theta_deg, u16 depth,
+//            u8 confidence, u8 state, f32 score, u8 reacquired,
+//            u8 searched_coarse, u16 0
+//   trailer  u32 CRC-32 of every byte before it
+// The session runs with the default MotionFilterParams and without shared
+// search features (each recovery placement a full track_step), the mode a
+// part short of RAM runs.
+inline constexpr char kSessionMagic[8] = {'G', 'B', 'S', 'E', 'S', 'S', '0', '1'};
+inline constexpr std::size_t kSessionHeaderBytes = 80;
+inline constexpr std::size_t kSessionRecordBytes = kRecordBytes + 24;
+inline constexpr std::uint16_t kMaxStackDepths = 16;
+
+constexpr std::size_t session_file_bytes(std::uint32_t frames, std::uint32_t width, std::uint32_t height,
+                                         std::uint16_t stack_depths, std::uint32_t stack_width,
+                                         std::uint32_t stack_height) noexcept {
+  return kSessionHeaderBytes + std::size_t{stack_depths} * stack_width * stack_height + std::size_t{frames} * width * height +
+         std::size_t{frames} * kSessionRecordBytes + kTrailerBytes;
+}
+
+struct SessionVectorSet {
+  std::uint32_t frame_count = 0;
+  std::uint32_t width = 0;
+  std::uint32_t height = 0;
+  Detector detector;
+  Pose init;
+  SessionOptions options;             // motion_filter, refine, recover and recovery from the file
+  std::uint16_t stack_depths = 0;
+  std::uint32_t stack_width = 0, stack_height = 0;
+  float stack_ref_x = 0.0f, stack_ref_y = 0.0f;
+  std::uint32_t stack_step = 2;
+  std::span<const std::byte> stack;     // stack_depths * stack_width * stack_height
+  std::span<const std::byte> frames;    // frame_count * width * height
+  std::span<const std::byte> expected;  // frame_count * kSessionRecordBytes
+
+  ImageView frame(std::uint32_t i) const noexcept {
+    return {reinterpret_cast<const std::uint8_t*>(frames.data()) + std::size_t{i} * width * height, width, height, width};
+  }
+  ImageView stack_image(std::uint16_t d) const noexcept {
+    return {reinterpret_cast<const std::uint8_t*>(stack.data()) + std::size_t{d} * stack_width * stack_height, stack_width,
+            stack_height, stack_width};
+  }
+};
+
+// Validates size, magic, dimensions, options and CRC. Errors as open_vectors.
+Status open_session_vectors(std::span<const std::byte> bytes, SessionVectorSet& out) noexcept;
+void encode_session_header(const SessionVectorSet& set, std::span<std::byte, kSessionHeaderBytes> out) noexcept;
+void encode_session_record(const SessionResult& result, std::span<std::byte, kSessionRecordBytes> out) noexcept;
+
+// Replays the session from the initial pose and compares every field of
+// every record. `stack_views` holds at least set.stack_depths entries (the
+// caller's storage for the focus stack's views). Status errors are the
+// session's; a mismatch is described in `report`.
+Status check_session_vectors(const TableView& table, const SessionVectorSet& set, SessionScratch scratch,
+                             std::span<ImageView> stack_views, Report& report) noexcept;
 
 }  // namespace gabarit::vectors

@@ -1,7 +1,10 @@
 // The scene behind the cross-target test vectors (`gabarit vectors`): a
 // ~1000-feature 4-DOF model (x, y, theta, focus-stack depth) moving through a
 // short noisy sequence, the table built for it, and the host's tracking
-// results recorded frame by frame (platform/common/.../test_vectors.hpp).
+// results recorded frame by frame (app/include/gabarit/app/test_vectors.hpp):
+// track_step's (vectors.gbv), and a TrackingSession's over a longer sequence
+// in which the object is hidden for a while, with the model images as its
+// focus stack (session.gbs).
 // The firmware embeds the same files, so the defaults are sized for an
 // STM32H7-class part (2 MiB flash, 512 KiB RAM) with the table decimated.
 #pragma once
@@ -18,6 +21,12 @@ struct VectorSceneOptions {
   double keep = 0.2;                  // decimation: fraction of references kept
   double noise = 0.02;                // salt-and-pepper rate
   std::uint64_t seed = 1;
+  // The session's sequence: session_frames frames, the object hidden from
+  // hidden_from for hidden_frames (long enough for the session to become
+  // lost and search).
+  std::uint32_t session_frames = 16;
+  std::uint32_t hidden_from = 4;
+  std::uint32_t hidden_frames = 8;
 };
 
 struct VectorSceneSummary {
@@ -27,9 +36,12 @@ struct VectorSceneSummary {
   std::uint32_t cells = 0;
   std::uint32_t width = 0, height = 0;
   std::uint32_t frames_on_truth = 0;  // frames within 1.5 px and 1.5 deg of the truth, depth exact
+  std::size_t session_bytes = 0;
+  std::uint32_t session_lost_frames = 0;  // frames the session reported lost
+  bool session_reacquired = false;        // it found the object again after the occlusion
 };
 
-// Writes DIR/table.gbt and DIR/vectors.gbv. Same options, same bytes.
+// Writes DIR/table.gbt, DIR/vectors.gbv and DIR/session.gbs. Same options, same bytes.
 VectorSceneSummary write_test_vectors(const VectorSceneOptions& options, const std::string& dir);
 
 }  // namespace gabarit::host
