@@ -90,7 +90,7 @@ extern "C" int app_main() {
   scratch.roi_mask = g_roi_mask;
   gabarit::vectors::Report report;
 
-  if (gabarit_vectors_end != gabarit_vectors) {
+  if (!between(gabarit_vectors, gabarit_vectors_end).empty()) {
     gabarit::vectors::VectorSet set;
     if (const auto s = gabarit::vectors::open_vectors(between(gabarit_vectors, gabarit_vectors_end), set); s != gabarit::Status::kOk)
       return fail("vectors", s);
@@ -102,7 +102,7 @@ extern "C" int app_main() {
                       .dec(std::uint64_t{set.width}).text("x").dec(std::uint64_t{set.height})
                       .text(", poses and votes bit-identical to the host"));
   }
-  if (gabarit_session_end != gabarit_session) {
+  if (!between(gabarit_session, gabarit_session_end).empty()) {
     gabarit::vectors::SessionVectorSet set;
     if (const auto s = gabarit::vectors::open_session_vectors(between(gabarit_session, gabarit_session_end), set);
         s != gabarit::Status::kOk)
