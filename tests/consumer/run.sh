@@ -31,7 +31,9 @@ esac
 cmake "${args[@]}" > "$work/configure.log" || { cat "$work/configure.log"; exit 1; }
 cmake --build "$work/build" > "$work/build.log" || { cat "$work/build.log"; exit 1; }
 if [ -z "$toolchain" ]; then
-  "$work/build/consumer" || { echo "consumer exited $?"; exit 1; }
+  status=0
+  "$work/build/consumer" || status=$?
+  [ "$status" = 0 ] || { echo "consumer exited $status (main.cpp lists the codes)"; exit 1; }
   echo "consumer ($mode, host): built and ran"
 else
   echo "consumer ($mode, $(basename "$toolchain" .cmake)): built and linked"
