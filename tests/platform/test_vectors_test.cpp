@@ -49,13 +49,22 @@ class TestVectors : public ::testing::Test {
   }
   static void TearDownTestSuite() { std::filesystem::remove_all(dir_); }
 
+  // Table a/table.gbt, copied to 8-byte-aligned storage (the sections are aligned).
+  struct AlignedTable {
+    AlignedTable() {
+      const std::vector<std::byte> bytes = read_bytes(dir_ / "a" / "table.gbt");
+      words.resize((bytes.size() + 7) / 8);
+      std::memcpy(words.data(), bytes.data(), bytes.size());
+      EXPECT_EQ(TableView::open({reinterpret_cast<const std::byte*>(words.data()), bytes.size()}, view), Status::kOk);
+    }
+    std::vector<std::uint64_t> words;
+    TableView view;
+  };
+
   // Replays `file` on the host against table a/table.gbt.
   static Status replay(const std::vector<std::byte>& file, vectors::Report& report) {
-    const std::vector<std::byte> table_bytes = read_bytes(dir_ / "a" / "table.gbt");
-    std::vector<std::uint64_t> aligned((table_bytes.size() + 7) / 8);
-    std::memcpy(aligned.data(), table_bytes.data(), table_bytes.size());
-    TableView table;
-    EXPECT_EQ(TableView::open({reinterpret_cast<const std::byte*>(aligned.data()), table_bytes.size()}, table), Status::kOk);
+    AlignedTable aligned;
+    const TableView& table = aligned.view;
     vectors::VectorSet set;
     GABARIT_TRY(vectors::open_vectors(file, set));
     app::TrackerBuffers buffers(table, app::VoterChoice::kCsr);
@@ -64,11 +73,8 @@ class TestVectors : public ::testing::Test {
 
   // Replays session `file` on the host against table a/table.gbt.
   static Status replay_session(const std::vector<std::byte>& file, vectors::Report& report) {
-    const std::vector<std::byte> table_bytes = read_bytes(dir_ / "a" / "table.gbt");
-    std::vector<std::uint64_t> aligned((table_bytes.size() + 7) / 8);
-    std::memcpy(aligned.data(), table_bytes.data(), table_bytes.size());
-    TableView table;
-    EXPECT_EQ(TableView::open({reinterpret_cast<const std::byte*>(aligned.data()), table_bytes.size()}, table), Status::kOk);
+    AlignedTable aligned;
+    const TableView& table = aligned.view;
     vectors::SessionVectorSet set;
     GABARIT_TRY(vectors::open_session_vectors(file, set));
     app::TrackerBuffers buffers(table, app::VoterChoice::kCsr);

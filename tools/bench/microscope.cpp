@@ -571,6 +571,20 @@ void translation_policy_table(const std::string& dir, bool quick, std::ostringst
   md << "\n";
 }
 
+// A binary focus stack of `depths` depths: depth n is the curve scaled by 1 + 0.01 n.
+host::ModelStack scaled_stack(const std::vector<host::Point>& curve, int depths) {
+  host::ModelStack m;
+  for (int d = 0; d < depths; ++d) {
+    std::vector<host::Point> scaled;
+    for (const auto& p : curve)
+      scaled.push_back({static_cast<std::int32_t>(std::lround(p.x * (1 + 0.01 * d))), static_cast<std::int32_t>(std::lround(p.y * (1 + 0.01 * d)))});
+    std::sort(scaled.begin(), scaled.end());
+    scaled.erase(std::unique(scaled.begin(), scaled.end()), scaled.end());
+    m.depths.push_back(scaled);
+  }
+  return m;
+}
+
 // 7. The thesis's Fig. 6.6: pre-processing time, references stored and
 // tracking time against the model's feature count, for four state spaces.
 void complexity_table(bool quick, std::ostringstream& md) {
@@ -590,16 +604,8 @@ void complexity_table(bool quick, std::ostringstream& md) {
      << "| state space | features | build ms | references | table MB | us/frame |\n|---|---:|---:|---:|---:|---:|\n";
   for (const Setting& st : settings) {
     for (const std::size_t n : counts) {
-      host::ModelStack m;
       const std::vector<host::Point> curve = host::random_closed_curve(n, 9);
-      for (int d = 0; d < st.depths; ++d) {
-        std::vector<host::Point> scaled;
-        for (const auto& p : curve)
-          scaled.push_back({static_cast<std::int32_t>(std::lround(p.x * (1 + 0.01 * d))), static_cast<std::int32_t>(std::lround(p.y * (1 + 0.01 * d)))});
-        std::sort(scaled.begin(), scaled.end());
-        scaled.erase(std::unique(scaled.begin(), scaled.end()), scaled.end());
-        m.depths.push_back(scaled);
-      }
+      const host::ModelStack m = scaled_stack(curve, st.depths);
       host::BuildOptions b;
       b.space.x = host::parse_axis(st.xy, "x");
       b.space.y = host::parse_axis(st.xy, "y");
@@ -636,16 +642,7 @@ void complexity_table(bool quick, std::ostringstream& md) {
 
 // 6. Building a ~1000-feature 4-DOF table: 20x20 px x 10 depths x 4 deg.
 void build_time_section(bool quick, std::ostringstream& md) {
-  host::ModelStack big;
-  const std::vector<host::Point> curve = host::random_closed_curve(1000, 5);
-  for (int d = 0; d < 10; ++d) {
-    std::vector<host::Point> scaled;
-    for (const auto& p : curve)
-      scaled.push_back({static_cast<std::int32_t>(std::lround(p.x * (1 + 0.01 * d))), static_cast<std::int32_t>(std::lround(p.y * (1 + 0.01 * d)))});
-    std::sort(scaled.begin(), scaled.end());
-    scaled.erase(std::unique(scaled.begin(), scaled.end()), scaled.end());
-    big.depths.push_back(scaled);
-  }
+  const host::ModelStack big = scaled_stack(host::random_closed_curve(1000, 5), 10);
   host::BuildOptions b;
   b.space.x = host::parse_axis("-10:10:21", "x");
   b.space.y = host::parse_axis("-10:10:21", "y");

@@ -15,7 +15,7 @@
 //    faster): Sobel gradient, m = |gx| + |gy|; non-maximum suppression across
 //    the edge, along the gradient direction quantised to 0, 45, 90 or 135
 //    degrees (a pixel is kept if m >= the neighbour ahead and m > the one
-//    behind); double threshold, high = threshold and low = threshold / 2: a
+//    behind); two thresholds (hysteresis), high = threshold and low = threshold / 2: a
 //    strong pixel (m >= high) is a feature, a weak one (low <= m < high) only
 //    if one of its 8 neighbours is strong. That is one step of Canny's
 //    hysteresis, which otherwise follows weak chains of any length and needs

@@ -80,7 +80,7 @@ inline constexpr std::size_t kStencilSize = 28;  // u32, pixels in the (decimate
 enum class DetectorKind : std::uint8_t {
   kBinary = 0,        // any non-zero pixel is a feature
   kGradientRows = 1,  // Sobel |gx|+|gy| >= threshold, strongest of each run along a row
-  kCanny = 2,         // Canny variant: non-maximum suppression, double threshold (features.hpp)
+  kCanny = 2,         // Canny variant: non-maximum suppression, hysteresis thresholds (features.hpp)
 };
 
 constexpr std::uint32_t align_up(std::uint32_t n) noexcept {
