@@ -35,6 +35,15 @@ if [ -z "$toolchain" ]; then
   "$work/build/consumer" || status=$?
   [ "$status" = 0 ] || { echo "consumer exited $status (main.cpp lists the codes)"; exit 1; }
   echo "consumer ($mode, host): built and ran"
+  if [ "$mode" = install ] && command -v pkg-config > /dev/null; then
+    # The same program without CMake, from the pkg-config file alone.
+    export PKG_CONFIG_PATH="$work/prefix/lib/pkgconfig"
+    # shellcheck disable=SC2046
+    c++ -std=c++20 $(pkg-config --cflags gabarit-kernel) "$here/main.cpp" "$work/build/table.S" \
+        $(pkg-config --libs gabarit-kernel) -o "$work/consumer-pkg-config"
+    "$work/consumer-pkg-config" || { echo "the pkg-config build exited $?"; exit 1; }
+    echo "consumer (pkg-config, host): built and ran"
+  fi
 else
   echo "consumer ($mode, $(basename "$toolchain" .cmake)): built and linked"
 fi
