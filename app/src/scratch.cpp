@@ -30,7 +30,12 @@ SessionBuffers::SessionBuffers(const TableView& fine, const TableView* coarse, V
   if (coarse != nullptr) {
     coarse_.emplace(*coarse, voter);
   } else if (search_features) {
-    search_features_.resize(search_feature_capacity(fine));
+    const std::size_t needed = search_feature_capacity(fine);
+    if (needed > kMaxSearchFeatures) {
+      throw Error("the table's recovery search needs " + std::to_string(needed) + " feature slots, more than the " +
+                  std::to_string(kMaxSearchFeatures) + " allowed: rebuild it with narrower x/y ranges");
+    }
+    search_features_.resize(needed);
   }
 }
 

@@ -19,11 +19,14 @@ bool all_zero(const std::byte* p, std::size_t n) noexcept {
   return true;
 }
 
-Status check_axis(const std::byte* base, std::size_t at, std::uint32_t& cells_out) noexcept {
+// A bound the kernel can compute with: finite and within +-limit.
+bool bounded(float v, float limit) noexcept { return is_finite(v) && v >= -limit && v <= limit; }
+
+Status check_axis(const std::byte* base, std::size_t at, float limit, std::uint32_t& cells_out) noexcept {
   const float lo = load_le<float>(base + at);
   const float hi = load_le<float>(base + at + 4);
   const std::uint32_t cells = load_le<std::uint32_t>(base + at + 8);
-  if (!is_finite(lo) || !is_finite(hi) || cells == 0 || lo > hi) return Status::kBadHeaderField;
+  if (!bounded(lo, limit) || !bounded(hi, limit) || cells == 0 || lo > hi) return Status::kBadHeaderField;
   if (cells == 1 && lo != hi) return Status::kBadHeaderField;
   if (cells > 1 && lo == hi) return Status::kBadHeaderField;
   if (cells > table_format::kMaxCells) return Status::kCountTooLarge;
@@ -43,6 +46,41 @@ Status check_references(const std::byte* offsets, const std::byte* refs, std::ui
       if (r >= cell_count) return Status::kReferenceOutOfRange;
       if (i != begin && r <= previous) return Status::kReferencesNotSorted;
       previous = r;
+    }
+  }
+  return Status::kOk;
+}
+
+// Each cell must appear in the reference lists exactly stencil_size times
+// (scores are votes / stencil_size, at most 1). Counted without scratch of
+// the cell count's size: kChunk cells at a time, each pixel's list being
+// sorted, so a chunk's references of a pixel are found by binary search.
+template <class Ref>
+Status check_stencil_counts(const std::byte* offsets, const std::byte* refs, const std::byte* cells, std::uint32_t pixels,
+                            std::uint32_t cell_count) noexcept {
+  constexpr std::uint32_t kChunk = 128;
+  for (std::uint32_t first = 0; first < cell_count; first += kChunk) {
+    const std::uint32_t last = cell_count - first < kChunk ? cell_count : first + kChunk;
+    std::uint32_t counts[kChunk] = {};
+    for (std::uint32_t p = 0; p < pixels; ++p) {
+      std::uint32_t lo = load_le<std::uint32_t>(offsets + std::size_t{p} * 4);
+      const std::uint32_t end = load_le<std::uint32_t>(offsets + std::size_t{p} * 4 + 4);
+      std::uint32_t hi = end;
+      while (lo < hi) {  // the first reference >= first
+        const std::uint32_t mid = lo + (hi - lo) / 2;
+        if (load_le<Ref>(refs + std::size_t{mid} * sizeof(Ref)) < first) lo = mid + 1;
+        else hi = mid;
+      }
+      for (std::uint32_t i = lo; i < end; ++i) {
+        const std::uint32_t r = load_le<Ref>(refs + std::size_t{i} * sizeof(Ref));
+        if (r >= last) break;
+        ++counts[r - first];
+      }
+    }
+    for (std::uint32_t c = first; c < last; ++c) {
+      const std::uint32_t declared =
+          load_le<std::uint32_t>(cells + std::size_t{c} * table_format::kCellDescriptorBytes + coff::kStencilSize);
+      if (counts[c - first] != declared) return Status::kStencilSizeMismatch;
     }
   }
   return Status::kOk;
@@ -73,6 +111,8 @@ Status TableView::open(std::span<const std::byte> bytes, TableView& out) noexcep
   const std::uint32_t file_bytes = load_le<std::uint32_t>(b + off::kFileBytes);
   if (file_bytes > n) return Status::kTruncated;
   if (file_bytes != n || file_bytes < table_format::kHeaderBytes) return Status::kSizeMismatch;
+  // No checksum over a buffer larger than any valid table (seconds for gigabytes).
+  if (file_bytes > table_format::kMaxTableBytes) return Status::kCountTooLarge;
 
   if (table_checksum(bytes) != load_le<std::uint32_t>(b + off::kCrc32)) return Status::kBadChecksum;
 
@@ -101,15 +141,28 @@ Status TableView::open(std::span<const std::byte> bytes, TableView& out) noexcep
   if (detector > static_cast<std::uint8_t>(table_format::DetectorKind::kCanny)) {
     return Status::kBadHeaderField;
   }
+  // A detector the kernel can run: gradient thresholds in 1..kMaxDetectorThreshold
+  // (the Canny variant's low threshold, half of it, at least 1).
+  const std::uint16_t threshold = load_le<std::uint16_t>(b + off::kDetectorThreshold);
+  if (detector != static_cast<std::uint8_t>(table_format::DetectorKind::kBinary) &&
+      (threshold > table_format::kMaxDetectorThreshold ||
+       threshold < (detector == static_cast<std::uint8_t>(table_format::DetectorKind::kCanny) ? 2 : 1))) {
+    return Status::kBadHeaderField;
+  }
+  if (table_format::roi_window_side(roi_width, roi_height, load_le<std::int16_t>(b + off::kRoiOriginX),
+                                    load_le<std::int16_t>(b + off::kRoiOriginY)) > table_format::kMaxRoiWindowSide) {
+    return Status::kCountTooLarge;
+  }
   std::uint32_t cells_x = 0, cells_y = 0, cells_theta = 0;
-  GABARIT_TRY(check_axis(b, off::kAxisX, cells_x));
-  GABARIT_TRY(check_axis(b, off::kAxisY, cells_y));
-  GABARIT_TRY(check_axis(b, off::kAxisTheta, cells_theta));
+  GABARIT_TRY(check_axis(b, off::kAxisX, table_format::kMaxAxisPixels, cells_x));
+  GABARIT_TRY(check_axis(b, off::kAxisY, table_format::kMaxAxisPixels, cells_y));
+  GABARIT_TRY(check_axis(b, off::kAxisTheta, table_format::kMaxAxisDegrees, cells_theta));
   const std::uint64_t space_cells = std::uint64_t{cells_x} * cells_y * cells_theta * depth_count;
   if (space_cells != cell_count) return Status::kSizeMismatch;
   const float keep = load_le<float>(b + off::kKeepRatio);
   if (!is_finite(keep) || !(keep > 0.0f) || keep > 1.0f) return Status::kBadHeaderField;
-  if (!is_finite(load_le<float>(b + off::kModelRefX)) || !is_finite(load_le<float>(b + off::kModelRefY))) {
+  if (!bounded(load_le<float>(b + off::kModelRefX), table_format::kMaxModelRef) ||
+      !bounded(load_le<float>(b + off::kModelRefY), table_format::kMaxModelRef)) {
     return Status::kBadHeaderField;
   }
 
@@ -147,16 +200,19 @@ Status TableView::open(std::span<const std::byte> bytes, TableView& out) noexcep
     default: GABARIT_TRY(check_references<std::uint32_t>(offsets, refs, pixels, cell_count)); break;
   }
 
-  // Cell descriptors: finite ordered bounds, a valid depth, and stencil sizes
-  // that add up to the reference count (each reference is one stencil pixel).
+  // Cell descriptors: bounded ordered bounds (twice the axis limit: a cell
+  // may reach half a cell past its axis), a valid depth, and stencil sizes
+  // that add up to the reference count (each reference is one stencil pixel)
+  // and match how often each cell is referenced.
   std::uint64_t stencil_total = 0;
   std::uint32_t stencil_max = 0;
   for (std::uint32_t c = 0; c < cell_count; ++c) {
     const std::byte* d = b + cells_at + std::size_t{c} * table_format::kCellDescriptorBytes;
     for (std::size_t f = coff::kXLo; f <= coff::kThetaLo; f += 8) {
+      const float limit = 2.0f * (f == coff::kThetaLo ? table_format::kMaxAxisDegrees : table_format::kMaxAxisPixels);
       const float lo = load_le<float>(d + f);
       const float hi = load_le<float>(d + f + 4);
-      if (!is_finite(lo) || !is_finite(hi) || lo > hi) return Status::kBadHeaderField;
+      if (!bounded(lo, limit) || !bounded(hi, limit) || lo > hi) return Status::kBadHeaderField;
     }
     if (load_le<std::uint16_t>(d + coff::kDepth) >= depth_count || load_le<std::uint16_t>(d + coff::kReserved) != 0) {
       return Status::kBadHeaderField;
@@ -167,6 +223,11 @@ Status TableView::open(std::span<const std::byte> bytes, TableView& out) noexcep
   }
   if (stencil_total != reference_count || stencil_max != load_le<std::uint32_t>(b + off::kMaxStencilSize)) {
     return Status::kStencilSizeMismatch;
+  }
+  switch (reference_bytes) {
+    case 1: GABARIT_TRY(check_stencil_counts<std::uint8_t>(offsets, refs, b + cells_at, pixels, cell_count)); break;
+    case 2: GABARIT_TRY(check_stencil_counts<std::uint16_t>(offsets, refs, b + cells_at, pixels, cell_count)); break;
+    default: GABARIT_TRY(check_stencil_counts<std::uint32_t>(offsets, refs, b + cells_at, pixels, cell_count)); break;
   }
 
   std::uint64_t model_total = 0;
@@ -189,7 +250,7 @@ Status TableView::open(std::span<const std::byte> bytes, TableView& out) noexcep
   view.roi_height_ = roi_height;
   view.roi_origin_x_ = load_le<std::int16_t>(b + off::kRoiOriginX);
   view.roi_origin_y_ = load_le<std::int16_t>(b + off::kRoiOriginY);
-  view.detector_threshold_ = load_le<std::uint16_t>(b + off::kDetectorThreshold);
+  view.detector_threshold_ = threshold;
   view.depth_count_ = depth_count;
   view.reference_bytes_ = reference_bytes;
   view.detector_kind_ = static_cast<table_format::DetectorKind>(detector);

@@ -20,7 +20,7 @@
 
 #include "frame_counter.hpp"
 #include "gabarit/app/args.hpp"
-#include "gabarit/app/mapped_file.hpp"
+#include "gabarit/app/files.hpp"
 #include "gabarit/app/pose_row.hpp"
 #include "gabarit/app/scratch.hpp"
 #include "gabarit/crc32.hpp"

@@ -6,7 +6,7 @@
 #include "Vvoter_preload.h"
 #include "gabarit/host/voter_trials.hpp"
 #include "gabarit/features.hpp"
-#include "gabarit/app/mapped_file.hpp"
+#include "gabarit/app/files.hpp"
 #include "gabarit/host/thesis_shapes.hpp"
 #include "voter_harness.hpp"
 

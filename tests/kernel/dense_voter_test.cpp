@@ -100,7 +100,7 @@ TEST(DenseVoter, TrackingStepsAreIdenticalWithEitherVoter) {
 }
 
 TEST(DenseVoter, RejectsTablesAndBuffersItCannotServe) {
-  const auto bytes = testing::build(testing::point_model({{0, 0}}), "0:1024:1025", "0:0:1");
+  const auto bytes = testing::build(testing::point_model({{0, 0}}), "-512:512:1025", "0:0:1");  // 1025 cells
   const TableView big = testing::open_table(bytes);
   std::vector<std::uint64_t> masks(dense_mask_words(big.roi_pixels(), big.cell_count()));
   EXPECT_EQ(build_dense_masks(big, masks), Status::kInvalidArgument);

@@ -7,7 +7,7 @@
 #include <set>
 
 #include "gabarit/app/error.hpp"
-#include "gabarit/app/mapped_file.hpp"
+#include "gabarit/app/files.hpp"
 
 namespace gabarit::host {
 namespace {

@@ -8,7 +8,7 @@
 #include "gabarit/app/args.hpp"
 #include "commands.hpp"
 #include "gabarit/host/hdl_export.hpp"
-#include "gabarit/app/mapped_file.hpp"
+#include "gabarit/app/files.hpp"
 #include "gabarit/host/model.hpp"
 #include "gabarit/host/table_builder.hpp"
 #include "gabarit/host/table_inspect.hpp"

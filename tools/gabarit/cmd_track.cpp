@@ -9,7 +9,7 @@
 #include "commands.hpp"
 #include "gabarit/app/error.hpp"
 #include "gabarit/app/image_io.hpp"
-#include "gabarit/app/mapped_file.hpp"
+#include "gabarit/app/files.hpp"
 #include "gabarit/host/tracking_run.hpp"
 
 namespace gabarit::cli {

@@ -46,6 +46,7 @@ struct FeatureCount {
 
 // Largest gradient magnitude the Sobel L1 norm can produce on 8-bit images.
 inline constexpr std::uint16_t kMaxGradientMagnitude = 2040;
+static_assert(kMaxGradientMagnitude == table_format::kMaxDetectorThreshold, "a table may ask for any threshold up to the largest magnitude");
 
 // Sobel |gx| + |gy| at (x, y); 0 on the image border. Precondition: image.valid(), x < width, y < height.
 std::uint16_t gradient_magnitude(const ImageView& image, std::uint32_t x, std::uint32_t y) noexcept;

@@ -25,6 +25,36 @@ inline constexpr std::uint32_t kMaxReferences = 1u << 28;
 inline constexpr std::uint32_t kMaxModelPoints = 1u << 20;
 inline constexpr std::uint32_t kMaxDepths = 4096;
 
+// Limits of what a table may ask of the programs that run it, so that no
+// valid table makes a host allocate gigabytes or the kernel's arithmetic
+// overflow (docs/table-format.md, "Limits"). TableView::open refuses a table
+// beyond them (kCountTooLarge, kBadHeaderField); the builder refuses to write one.
+inline constexpr std::uint32_t kMaxTableBytes = 1u << 30;
+inline constexpr float kMaxAxisPixels = 1024.0f;   // |x|, |y|: axis and cell bounds
+inline constexpr float kMaxAxisDegrees = 360.0f;   // |theta|: axis and cell bounds
+inline constexpr float kMaxModelRef = 16384.0f;    // |model_ref_x|, |model_ref_y|
+// The side of the square image window that holds the ROI rotated by any
+// angle (roi_window_side below) is at most this: the tracker's feature
+// scratch (tracker_feature_capacity) is then at most 4 Mi entries (16 MiB).
+inline constexpr std::uint32_t kMaxRoiWindowSide = 2048;
+// A gradient detector's threshold: at most the largest Sobel L1 magnitude of
+// an 8-bit image (features.hpp's kMaxGradientMagnitude).
+inline constexpr std::uint16_t kMaxDetectorThreshold = 2040;
+
+// Side of the square image window that contains the ROI rotated by any angle:
+// 2 * ceil(r) + 1 where r is the ROI corner farthest from the ROI centre.
+constexpr std::uint32_t roi_window_side(std::uint16_t roi_width, std::uint16_t roi_height, std::int16_t roi_origin_x,
+                                        std::int16_t roi_origin_y) noexcept {
+  std::int64_t r2 = 0;
+  const std::int64_t xs[2] = {roi_origin_x, std::int64_t{roi_origin_x} + roi_width - 1};
+  const std::int64_t ys[2] = {roi_origin_y, std::int64_t{roi_origin_y} + roi_height - 1};
+  for (std::int64_t x : xs)
+    for (std::int64_t y : ys) r2 = x * x + y * y > r2 ? x * x + y * y : r2;
+  std::int64_t r = 0;
+  while (r * r < r2) ++r;  // ceil(sqrt(r2)) without floating point
+  return static_cast<std::uint32_t>(2 * r + 1);
+}
+
 // Header field offsets (bytes from the start of the table).
 namespace offset {
 inline constexpr std::size_t kMagic = 0;               // char[8]

@@ -35,18 +35,11 @@ namespace gabarit {
 enum class TrackState : std::uint8_t { kTracking = 0, kUncertain = 1, kLost = 2 };
 const char* track_state_name(TrackState state) noexcept;
 
-// Side of the square image window that contains the ROI rotated by any angle:
-// 2 * ceil(r) + 1 where r is the ROI corner farthest from the ROI centre.
+// Side of the square image window that contains the ROI rotated by any angle
+// (table_format::roi_window_side; at most kMaxRoiWindowSide in a valid table).
 constexpr std::uint32_t tracker_window_side(std::uint16_t roi_width, std::uint16_t roi_height,
                                             std::int16_t roi_origin_x, std::int16_t roi_origin_y) noexcept {
-  std::int64_t r2 = 0;
-  const std::int64_t xs[2] = {roi_origin_x, std::int64_t{roi_origin_x} + roi_width - 1};
-  const std::int64_t ys[2] = {roi_origin_y, std::int64_t{roi_origin_y} + roi_height - 1};
-  for (std::int64_t x : xs)
-    for (std::int64_t y : ys) r2 = x * x + y * y > r2 ? x * x + y * y : r2;
-  std::int64_t r = 0;
-  while (r * r < r2) ++r;  // ceil(sqrt(r2)) without floating point
-  return static_cast<std::uint32_t>(2 * r + 1);
+  return table_format::roi_window_side(roi_width, roi_height, roi_origin_x, roi_origin_y);
 }
 
 // Scratch sizes for track_step; use them to size static buffers and

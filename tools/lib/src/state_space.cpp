@@ -4,6 +4,7 @@
 #include <cstdlib>
 
 #include "gabarit/app/error.hpp"
+#include "gabarit/table_format.hpp"
 
 namespace gabarit::host {
 
@@ -20,14 +21,20 @@ Axis parse_axis(const std::string& text, const std::string& what) {
   if (smax.empty() || *end) throw bad("MAX is not a number");
   const long cells = std::strtol(scells.c_str(), &end, 10);
   if (scells.empty() || *end || cells < 1) throw bad("CELLS must be a positive integer");
-  if (!std::isfinite(mn) || !std::isfinite(mx) || std::fabs(mn) > 10000 || std::fabs(mx) > 10000) {
-    throw bad("MIN and MAX must lie within +-10000");
+  // The table format's limits (docs/table-format.md, "Limits"): pixels for
+  // x and y, degrees for theta.
+  const bool angle = what.find("theta") != std::string::npos;
+  const double limit = angle ? table_format::kMaxAxisDegrees : table_format::kMaxAxisPixels;
+  if (!std::isfinite(mn) || !std::isfinite(mx) || std::fabs(mn) > limit || std::fabs(mx) > limit) {
+    throw bad("MIN and MAX must lie within +-" + std::to_string(static_cast<int>(limit)) + (angle ? " degrees" : " pixels"));
   }
   if (cells > 4096) throw bad("at most 4096 cells per axis");
   if (mn > mx) throw bad("MIN > MAX");
-  if (cells == 1 && mn != mx) throw bad("one cell needs MIN == MAX (its centre)");
-  if (cells > 1 && mn == mx) throw bad("several cells need MIN < MAX");
-  return {static_cast<float>(mn), static_cast<float>(mx), static_cast<std::uint32_t>(cells)};
+  // The table stores the bounds in single precision: compare them as stored.
+  const auto fmin = static_cast<float>(mn), fmax = static_cast<float>(mx);
+  if (cells == 1 && fmin != fmax) throw bad("one cell needs MIN == MAX (its centre)");
+  if (cells > 1 && fmin == fmax) throw bad("several cells need MIN < MAX (as 32-bit floats)");
+  return {fmin, fmax, static_cast<std::uint32_t>(cells)};
 }
 
 void axis_cell_bounds(const Axis& axis, std::uint32_t i, float& lo, float& hi) {

@@ -1,6 +1,7 @@
 #include "gabarit/host/table_builder.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <limits>
 
@@ -8,6 +9,7 @@
 #include "gabarit/host/decimation.hpp"
 #include "gabarit/app/error.hpp"
 #include "gabarit/host/stencil.hpp"
+#include "gabarit/recovery_search.hpp"
 #include "gabarit/table_format.hpp"
 #include "gabarit/table_view.hpp"
 
@@ -44,6 +46,39 @@ Stencils compute_stencils(const ModelStack& model, const BuildOptions& options) 
     }
   }
   if (model_points > tf::kMaxModelPoints) throw app::Error("too many model points");
+  // The limits (docs/table-format.md, "Limits"). The ROI holds the model
+  // moved by every translation of the space, so it reaches at least as far
+  // from the reference point as the farthest model point and as the largest
+  // translation: a space beyond the window limit even so is refused before
+  // anything large is allocated (the exact window is checked below).
+  std::int64_t model_reach2 = 0;
+  for (const auto& d : model.depths)
+    for (const Point& p : d) model_reach2 = std::max<std::int64_t>(model_reach2, std::int64_t{p.x} * p.x + std::int64_t{p.y} * p.y);
+  const double shift = std::max({std::fabs(out.space.x.min), std::fabs(out.space.x.max), std::fabs(out.space.y.min),
+                                 std::fabs(out.space.y.max)});
+  const double reach_at_least = std::max(std::sqrt(static_cast<double>(model_reach2)), shift);
+  const auto too_far = [&](double reach) {
+    return app::Error("the ROI reaches " + std::to_string(static_cast<long>(std::ceil(reach))) +
+                      " px from the reference point; a table may reach at most " +
+                      std::to_string((tf::kMaxRoiWindowSide - 1) / 2) +
+                      " px (the tracker's scratch grows with its square): put the reference point on the object (--ref) or "
+                      "narrow --x/--y");
+  };
+  if (2.0 * std::ceil(reach_at_least) + 1.0 > tf::kMaxRoiWindowSide) throw too_far(reach_at_least);
+  if (!(std::fabs(model.ref_x) <= tf::kMaxModelRef && std::fabs(model.ref_y) <= tf::kMaxModelRef)) {
+    throw app::Error("the reference point must lie within +-" + std::to_string(static_cast<int>(tf::kMaxModelRef)) + " px");
+  }
+  // Every stencil holds at least about the model's points (the model moved
+  // by the cell's centre), so a space that would exceed the reference limit
+  // even so is refused now rather than after gigabytes of stencils.
+  std::uint64_t at_least = 0;
+  const std::uint64_t cells_per_depth = out.space.cell_count() / out.space.depths;
+  for (const auto& d : model.depths) at_least += cells_per_depth * (d.size() / 2);
+  if (at_least > tf::kMaxReferences) {
+    throw app::Error("state space of " + std::to_string(out.space.cell_count()) + " cells x " + std::to_string(model_points) +
+                     " model points would exceed " + std::to_string(tf::kMaxReferences) + " references; use fewer or larger cells");
+  }
+  if (!(static_cast<float>(options.keep) > 0.0f)) throw app::Error("--keep is too small to store (below 1e-38)");
 
   out.cells = out.space.cells();
   out.points.resize(out.cells.size());
@@ -72,6 +107,16 @@ Stencils compute_stencils(const ModelStack& model, const BuildOptions& options) 
   const std::int64_t roi_w = max_x - min_x + 1, roi_h = max_y - min_y + 1;
   if (roi_w > 0xFFFF || roi_h > 0xFFFF || roi_w * roi_h > tf::kMaxRoiPixels || min_x < INT16_MIN || min_y < INT16_MIN) {
     throw app::Error("ROI " + std::to_string(roi_w) + "x" + std::to_string(roi_h) + " is too large for the table format");
+  }
+  const std::uint32_t window = tf::roi_window_side(static_cast<std::uint16_t>(roi_w), static_cast<std::uint16_t>(roi_h),
+                                                   static_cast<std::int16_t>(min_x), static_cast<std::int16_t>(min_y));
+  if (window > tf::kMaxRoiWindowSide) throw too_far((window - 1) / 2.0);
+  const std::size_t search = search_feature_capacity(out.space.x, out.space.y, static_cast<std::uint16_t>(roi_w),
+                                                     static_cast<std::uint16_t>(roi_h), static_cast<std::int16_t>(min_x),
+                                                     static_cast<std::int16_t>(min_y));
+  if (search > kMaxSearchFeatures) {
+    throw app::Error("the recovery search of this table would need " + std::to_string(search) + " feature slots, more than the " +
+                     std::to_string(kMaxSearchFeatures) + " allowed (recovery_search.hpp): narrow --x/--y");
   }
   out.roi_min_x = static_cast<std::int32_t>(min_x);
   out.roi_min_y = static_cast<std::int32_t>(min_y);
@@ -202,6 +247,9 @@ std::vector<std::byte> serialise_table(const ModelStack& model, const BuildOptio
 std::vector<std::byte> build_table(const ModelStack& model, const BuildOptions& options) {
   Stencils stencils = compute_stencils(model, options);
   const CsrLists csr = assemble_csr(stencils, options);
+  if (csr.cells.empty()) {
+    throw app::Error("decimation kept none of the " + std::to_string(stencils.references) + " references; use a larger --keep");
+  }
   return serialise_table(model, options, stencils, csr);
 }
 

@@ -8,7 +8,7 @@
 
 #include "gabarit/app/error.hpp"
 #include "gabarit/app/image_io.hpp"
-#include "gabarit/app/mapped_file.hpp"
+#include "gabarit/app/files.hpp"
 #include "gabarit/app/scratch.hpp"
 #include "gabarit/app/test_vectors.hpp"
 #include "gabarit/byte_order.hpp"
