@@ -30,12 +30,10 @@ SessionBuffers::SessionBuffers(const TableView& fine, const TableView* coarse, V
   if (coarse != nullptr) {
     coarse_.emplace(*coarse, voter);
   } else if (search_features) {
+    // Past the cap (a table with very wide x/y ranges) the search votes each
+    // placement with a full track_step instead of allocating more.
     const std::size_t needed = search_feature_capacity(fine);
-    if (needed > kMaxSearchFeatures) {
-      throw Error("the table's recovery search needs " + std::to_string(needed) + " feature slots, more than the " +
-                  std::to_string(kMaxSearchFeatures) + " allowed: rebuild it with narrower x/y ranges");
-    }
-    search_features_.resize(needed);
+    if (needed <= kMaxSearchFeatures) search_features_.resize(needed);
   }
 }
 

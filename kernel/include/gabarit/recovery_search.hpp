@@ -80,9 +80,9 @@ constexpr std::size_t search_feature_capacity(const Axis& x, const Axis& y, std:
   const std::size_t side = 2 * std::size_t{search_reach(x, y, roi_width, roi_height, roi_origin_x, roi_origin_y)} + 1;
   return side * side;
 }
-// The most shared features a host allocates for the search (64 MiB): the
-// table builder refuses a table whose grid window needs more, and a hosted
-// program refuses to allocate more (app::SessionBuffers).
+// The most shared features a hosted program allocates for the search (64
+// MiB, app::SessionBuffers); a table whose grid window needs more (x/y ranges
+// of hundreds of pixels) is searched with a full track_step per placement.
 inline constexpr std::size_t kMaxSearchFeatures = std::size_t{1} << 24;
 
 inline std::uint32_t search_reach(const TableView& fine) noexcept {

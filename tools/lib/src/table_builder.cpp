@@ -9,7 +9,6 @@
 #include "gabarit/host/decimation.hpp"
 #include "gabarit/app/error.hpp"
 #include "gabarit/host/stencil.hpp"
-#include "gabarit/recovery_search.hpp"
 #include "gabarit/table_format.hpp"
 #include "gabarit/table_view.hpp"
 
@@ -111,13 +110,6 @@ Stencils compute_stencils(const ModelStack& model, const BuildOptions& options) 
   const std::uint32_t window = tf::roi_window_side(static_cast<std::uint16_t>(roi_w), static_cast<std::uint16_t>(roi_h),
                                                    static_cast<std::int16_t>(min_x), static_cast<std::int16_t>(min_y));
   if (window > tf::kMaxRoiWindowSide) throw too_far((window - 1) / 2.0);
-  const std::size_t search = search_feature_capacity(out.space.x, out.space.y, static_cast<std::uint16_t>(roi_w),
-                                                     static_cast<std::uint16_t>(roi_h), static_cast<std::int16_t>(min_x),
-                                                     static_cast<std::int16_t>(min_y));
-  if (search > kMaxSearchFeatures) {
-    throw app::Error("the recovery search of this table would need " + std::to_string(search) + " feature slots, more than the " +
-                     std::to_string(kMaxSearchFeatures) + " allowed (recovery_search.hpp): narrow --x/--y");
-  }
   out.roi_min_x = static_cast<std::int32_t>(min_x);
   out.roi_min_y = static_cast<std::int32_t>(min_y);
   out.roi_width = static_cast<std::uint16_t>(roi_w);

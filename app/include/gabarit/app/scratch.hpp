@@ -35,11 +35,14 @@ class TrackerBuffers {
 
 // Scratch for a TrackingSession: the fine table's, the coarse table's when
 // there is one, and the recovery search's shared features when asked for
-// (recovery_search.hpp; only without a coarse table, which votes its own).
+// (recovery_search.hpp; only without a coarse table, which votes its own,
+// and only up to kMaxSearchFeatures: beyond, each placement is a full
+// track_step).
 class SessionBuffers {
  public:
   SessionBuffers(const TableView& fine, const TableView* coarse, VoterChoice voter, bool search_features);
   SessionScratch scratch();
+  bool shares_search_features() const { return !search_features_.empty(); }
 
  private:
   TrackerBuffers fine_;
