@@ -167,11 +167,10 @@ GrayImage read_pgm(const std::string& path) {
 }
 
 void write_pgm(const std::string& path, const GrayImage& image) {
-  File f = open_or_throw(path, "wb");
-  std::fprintf(f.get(), "P5\n%u %u\n255\n", image.width, image.height);
-  if (std::fwrite(image.pixels.data(), 1, image.pixels.size(), f.get()) != image.pixels.size()) {
-    throw Error(path + ": write failed");
-  }
+  OutputFile out(path);
+  out.write("P5\n" + std::to_string(image.width) + " " + std::to_string(image.height) + "\n255\n");
+  out.write(std::as_bytes(std::span(image.pixels)));
+  out.commit();
 }
 
 std::unique_ptr<FrameSource> open_frames(const std::string& path) {
@@ -181,30 +180,17 @@ std::unique_ptr<FrameSource> open_frames(const std::string& path) {
 }
 
 Y4mWriter::Y4mWriter(const std::string& path, std::uint32_t width, std::uint32_t height, std::uint32_t fps)
-    : path_(path), width_(width), height_(height) {
-  file_ = std::fopen(path.c_str(), "wb");
-  if (!file_) throw Error(path + ": cannot create: " + std::strerror(errno));
-  std::fprintf(file_, "YUV4MPEG2 W%u H%u F%u:1 Ip A1:1 Cmono\n", width, height, fps);
-}
-
-Y4mWriter::~Y4mWriter() {
-  if (file_) std::fclose(file_);
+    : file_(path), width_(width), height_(height) {
+  file_.write("YUV4MPEG2 W" + std::to_string(width) + " H" + std::to_string(height) + " F" + std::to_string(fps) +
+              ":1 Ip A1:1 Cmono\n");
 }
 
 void Y4mWriter::write(const GrayImage& frame) {
-  if (frame.width != width_ || frame.height != height_) throw Error(path_ + ": frame size differs from stream size");
-  std::fputs("FRAME\n", file_);
-  if (std::fwrite(frame.pixels.data(), 1, frame.pixels.size(), file_) != frame.pixels.size()) {
-    throw Error(path_ + ": write failed");
-  }
+  if (frame.width != width_ || frame.height != height_) throw Error(file_.path() + ": frame size differs from stream size");
+  file_.write("FRAME\n");
+  file_.write(std::as_bytes(std::span(frame.pixels)));
 }
 
-void Y4mWriter::close() {
-  if (file_ && std::fclose(file_) != 0) {
-    file_ = nullptr;
-    throw Error(path_ + ": write failed on close");
-  }
-  file_ = nullptr;
-}
+void Y4mWriter::close() { file_.commit(); }
 
 }  // namespace gabarit::app

@@ -2,6 +2,7 @@
 #include <cstdio>
 
 #include "gabarit/app/args.hpp"
+#include "gabarit/app/files.hpp"
 #include "commands.hpp"
 #include "gabarit/host/scene_synth.hpp"
 #include "gabarit/host/synth.hpp"
@@ -70,6 +71,11 @@ int synth(const std::vector<std::string>& argv) {
   host::SynthOptions o;
   o.seed = static_cast<std::uint64_t>(args.integer("--seed", 1, 0, INT64_MAX));
   const std::string shape = args.get("--shape");
+  if (shape != "random" && shape != "curve" && shape != "watch") {  // a file: never one of the outputs
+    const std::string input = shape.rfind("photo:", 0) == 0 ? shape.substr(6) : shape;
+    for (const char* name : {"frames.y4m", "gt.csv", "model.csv", "model.pgm"})
+      app::refuse_same_file(args.get("-o") + "/" + name, "-o", {input});
+  }
   const bool counted = shape == "random" || shape.rfind("photo:", 0) == 0;
   if (args.has("--points") && !counted) throw app::UsageError("--points applies to --shape random and photo:");
   o.shape = host::resolve_shape(shape, static_cast<std::size_t>(args.integer("--points", shape == "random" ? 194 : 2800, 8, 20000)),

@@ -64,6 +64,11 @@ int tables_build(const std::vector<std::string>& argv) {
   const bool has_images = args.has("--model");
   if (has_images == args.has("--model-points")) throw app::UsageError("give either --model or --model-points");
 
+  {
+    std::vector<std::string> inputs = images;
+    if (args.has("--model-points")) inputs.push_back(args.get("--model-points"));
+    app::refuse_same_file(args.get("-o"), "-o", inputs);
+  }
   host::ModelStack model;
   if (has_images) {
     host::ImageModelOptions mo;

@@ -1,9 +1,8 @@
 // gabarit track
 #include <cmath>
 #include <cstdio>
-#include <fstream>
-#include <iostream>
 #include <optional>
+#include <sstream>
 
 #include "gabarit/app/args.hpp"
 #include "commands.hpp"
@@ -57,6 +56,7 @@ int track(const std::vector<std::string>& argv) {
   options.threads = static_cast<unsigned>(args.integer("--threads", 1, 1, 64));
   if (options.threads > 1 && (options.session.motion_filter || options.session.refine || options.session.recover))
     throw app::UsageError("--threads applies to the plain loop, without --motion-filter, --refine, --recover or --coarse");
+  std::vector<std::string> focus_stack_paths;
   if (args.has("--focus-stack")) {
     if (options.threads > 1) throw app::UsageError("--focus-stack needs the session loop; drop --threads");
     std::string list = args.get("--focus-stack");
@@ -65,6 +65,7 @@ int track(const std::vector<std::string>& argv) {
       const std::string path = list.substr(start, comma - start);
       if (path.empty()) throw app::UsageError("--focus-stack: an empty image path");
       options.focus_stack.push_back(app::read_pgm(path));
+      focus_stack_paths.push_back(path);
       start = comma + 1;
     }
   }
@@ -78,21 +79,34 @@ int track(const std::vector<std::string>& argv) {
     options.coarse = &coarse;
   }
 
-  std::ofstream file_out;
-  std::ostream* out = &std::cout;
-  if (args.has("-o")) {
-    file_out.open(args.get("-o"));
-    if (!file_out) throw app::Error(args.get("-o") + ": cannot create");
-    out = &file_out;
+  // Outputs never name an input, and replace their file only when the run
+  // is complete: any error leaves a previous output as it was.
+  std::vector<std::string> inputs = {args.get("--table"), args.get("--frames"), args.get_or("--coarse", "")};
+  for (const std::string& path : focus_stack_paths) inputs.push_back(path);
+  for (const char* option : {"-o", "--stats"}) {
+    if (args.has(option)) app::refuse_same_file(args.get(option), option, inputs);
   }
-  *out << app::kPoseCsvHeader << '\n';
+  if (args.has("-o") && args.has("--stats")) app::refuse_same_file(args.get("--stats"), "--stats", {args.get("-o")});
   auto frames = app::open_frames(args.get("--frames"));
+  std::optional<app::OutputFile> file_out;
+  if (args.has("-o")) file_out.emplace(args.get("-o"));
+  std::string rows = std::string(app::kPoseCsvHeader) + '\n';
+  const auto emit = [&](bool last) {  // to the file as it grows, to stdout line by line
+    if (file_out) {
+      if (rows.size() >= 65536 || last) file_out->write(rows), rows.clear();
+    } else {
+      std::fputs(rows.c_str(), stdout);
+      rows.clear();
+    }
+  };
   std::vector<double> micros;
   double features = 0, votes = 0;
   std::uint64_t dropped = 0;
   std::size_t lost = 0, uncertain = 0;
   host::run_tracking(table, *frames, pose, options, [&](const app::TrackRow& row) {
-    *out << app::pose_csv_row(row) << '\n';
+    rows += app::pose_csv_row(row);
+    rows += '\n';
+    emit(false);
     micros.push_back(row.micros);
     features += row.step.features;
     votes += static_cast<double>(row.step.votes);
@@ -100,19 +114,19 @@ int track(const std::vector<std::string>& argv) {
     lost += row.step.state == TrackState::kLost;
     uncertain += row.step.state == TrackState::kUncertain;
   });
-  out->flush();
-  if (!*out) throw app::Error("pose output: write failed");
+  emit(true);
+  if (file_out) file_out->commit();
+  if (!file_out && (std::fflush(stdout) != 0 || std::ferror(stdout))) throw app::Error("pose output (stdout): write failed");
   const host::TimingSummary t = host::summarise_timing(micros);
   const double n = t.frames ? static_cast<double>(t.frames) : 1.0;
   if (args.has("--stats")) {
-    std::ofstream stats(args.get("--stats"));
-    if (!stats) throw app::Error(args.get("--stats") + ": cannot create");
+    std::ostringstream stats;
     stats << "{\n  \"frames\": " << t.frames << ",\n  \"per_frame_us\": {\"mean\": " << t.mean << ", \"p50\": " << t.p50
           << ", \"p99\": " << t.p99 << ", \"max\": " << t.max << "},\n  \"features_per_frame\": " << features / n
           << ",\n  \"votes_per_frame\": " << votes / n << ",\n  \"features_dropped\": " << dropped
           << ",\n  \"lost_frames\": " << lost << ",\n  \"uncertain_frames\": " << uncertain
           << ",\n  \"table_bytes\": " << table.size_bytes() << ",\n  \"cells\": " << table.cell_count() << "\n}\n";
-    if (!stats.flush()) throw app::Error(args.get("--stats") + ": write failed");
+    app::write_file(args.get("--stats"), stats.str());
   }
   std::fprintf(stderr, "tracked %zu frames: %.1f us/frame mean (p50 %.1f, p99 %.1f, max %.1f), %.0f features and %.0f votes per frame, %zu lost\n",
                t.frames, t.mean, t.p50, t.p99, t.max, features / n, votes / n, lost);

@@ -7,6 +7,7 @@
 
 #include "gabarit/features.hpp"
 #include "gabarit/app/error.hpp"
+#include "gabarit/app/files.hpp"
 #include "gabarit/app/image_io.hpp"
 
 namespace gabarit::host {
@@ -38,11 +39,10 @@ std::vector<Point> read_points_csv(const std::string& path) {
 }
 
 void write_points_csv(const std::string& path, const std::vector<Point>& points) {
-  std::ofstream out(path);
-  if (!out) throw app::Error(path + ": cannot create");
+  std::ostringstream out;
   out << "x,y\n";
   for (const Point& p : points) out << p.x << ',' << p.y << '\n';
-  if (!out) throw app::Error(path + ": write failed");
+  app::write_file(path, out.str());
 }
 
 std::uint16_t default_gradient_threshold(std::uint16_t strongest_magnitude) {

@@ -1,12 +1,14 @@
 #include "gabarit/host/scene_synth.hpp"
 
 #include <algorithm>
+#include <sstream>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 
 #include "gabarit/app/error.hpp"
+#include "gabarit/app/files.hpp"
 #include "gabarit/app/image_io.hpp"
 #include "gabarit/host/rng.hpp"
 #include "gabarit/host/thesis_shapes.hpp"
@@ -189,7 +191,7 @@ SceneSummary write_scene_sequence(const SceneOptions& o, const std::string& dir)
   };
 
   app::Y4mWriter y4m((std::filesystem::path(dir) / "frames.y4m").string(), o.width, o.height);
-  std::ofstream gt(std::filesystem::path(dir) / "gt.csv");
+  std::ostringstream gt;
   gt << "frame,x,y,theta_deg,depth,visible\n";
   SceneSummary summary;
   summary.object_radius = kObjectRadius;
@@ -236,7 +238,7 @@ SceneSummary write_scene_sequence(const SceneOptions& o, const std::string& dir)
     summary.visible_frames += occluded ? 0 : 1;
   }
   y4m.close();
-  if (!gt.flush()) throw app::Error("scene: cannot write gt.csv");
+  app::write_file((std::filesystem::path(dir) / "gt.csv").string(), gt.str());
   return summary;
 }
 

@@ -1,6 +1,7 @@
 #include "gabarit/host/synth.hpp"
 
 #include <algorithm>
+#include <sstream>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -8,6 +9,7 @@
 
 #include "gabarit/deterministic_math.hpp"
 #include "gabarit/app/error.hpp"
+#include "gabarit/app/files.hpp"
 #include "gabarit/host/rng.hpp"
 
 namespace gabarit::host {
@@ -93,8 +95,7 @@ std::vector<TruthRow> write_synthetic_sequence(const SynthOptions& o, const std:
 
   std::filesystem::create_directories(dir);
   app::Y4mWriter video(dir + "/frames.y4m", o.width, o.height);
-  std::ofstream gt(dir + "/gt.csv");
-  if (!gt) throw app::Error(dir + "/gt.csv: cannot create");
+  std::ostringstream gt;
   gt << "frame,x,y,theta_deg,depth,visible\n";
 
   Rng motion(o.seed);
@@ -118,7 +119,7 @@ std::vector<TruthRow> write_synthetic_sequence(const SynthOptions& o, const std:
     truth.push_back({f, x, y});
   }
   video.close();
-  if (!gt.flush()) throw app::Error(dir + "/gt.csv: write failed");
+  app::write_file(dir + "/gt.csv", gt.str());
 
   write_points_csv(dir + "/model.csv", o.shape);
   const std::int32_t radius = std::max({-min_x, max_x, -min_y, max_y}) + 2;

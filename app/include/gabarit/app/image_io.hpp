@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "gabarit/app/files.hpp"
 #include "gabarit/image_view.hpp"
 
 namespace gabarit::app {
@@ -39,19 +40,16 @@ class FrameSource {
 // A Y4M file, or a directory of .pgm frames read in name order.
 std::unique_ptr<FrameSource> open_frames(const std::string& path);
 
-// Writes a Y4M stream with colourspace Cmono.
+// Writes a Y4M stream with colourspace Cmono. The file appears (replacing
+// any previous one) only when close() succeeds (files.hpp, OutputFile).
 class Y4mWriter {
  public:
   Y4mWriter(const std::string& path, std::uint32_t width, std::uint32_t height, std::uint32_t fps = 30);
-  ~Y4mWriter();
-  Y4mWriter(const Y4mWriter&) = delete;
-  Y4mWriter& operator=(const Y4mWriter&) = delete;
   void write(const GrayImage& frame);
   void close();
 
  private:
-  std::FILE* file_ = nullptr;
-  std::string path_;
+  OutputFile file_;
   std::uint32_t width_, height_;
 };
 
