@@ -53,6 +53,12 @@ static_assert(all_distinct() && kSearchPlacements[8].i == 1 && kSearchPlacements
                   kSearchPlacements[9].i == 0 && kSearchPlacements[9].turn == 1 && kSearchPlacements[10].turn == -1,
               "every placement once: the 9 near ones first, then ring 0 turned by +-1 step, shell by shell");
 
+// Lost periods longer than this extrapolate no further (the centre is clamped
+// to the frame anyway); it keeps turn / 360 inside round_to_int's range.
+constexpr std::uint32_t kMaxExtrapolatedFrames = 1u << 20;
+
+float clamp_to(float v, float lo, float hi) noexcept { return v < lo ? lo : (v > hi ? hi : v); }
+
 }  // namespace
 
 bool valid(const RecoveryOptions& o) noexcept {
@@ -72,10 +78,20 @@ Status RecoverySearch::run(const ImageView& image, const RecoveryOptions& option
   const bool extrapolate = searches_++ % 2 == 0;
   Pose centre = last.pose;
   if (extrapolate) {
-    const auto n = static_cast<float>(last.frames_since);
+    // However long the target has been lost, the extrapolated centre stays
+    // where a target can be seen: inside the frame, and within half a turn
+    // of the last confident angle (a rotation is periodic). Without this a
+    // long lost period walked the centre out of range (past +-1e6 px after
+    // ~3e5 frames at a few px per frame) and every search failed.
+    const float n = static_cast<float>(last.frames_since < kMaxExtrapolatedFrames ? last.frames_since : kMaxExtrapolatedFrames);
     centre.x += n * last.motion.vx;
     centre.y += n * last.motion.vy;
-    centre.theta_deg += n * last.motion.vtheta;
+    if (image.valid()) {
+      centre.x = clamp_to(centre.x, 0.0f, static_cast<float>(image.width - 1));
+      centre.y = clamp_to(centre.y, 0.0f, static_cast<float>(image.height - 1));
+    }
+    const float turn = n * last.motion.vtheta;
+    centre.theta_deg += turn - 360.0f * static_cast<float>(round_to_int(turn / 360.0f));
   }
   // Each placement's fine vote goes to a shortlist of the three best scores;
   // each of those is then voted again from its own estimate (the target, once

@@ -146,5 +146,32 @@ TEST(RecoverySearch, FindsATargetBeyondTheTableAndKeepsItsInterval) {
   static_assert(search_reach(Axis{-4, 4, 9}, Axis{-4, 4, 9}, 40, 40, -20, -20) == 4 * 9 + 1 + 59 / 2 + 1);  // window side 59 for a 40 x 40 ROI
 }
 
+// A long lost period: the last confident velocity, extrapolated over 340,000
+// frames (about 3 hours at 30 fps), would put the centre past the kernel's
+// +-1e6 px pose range, and every search used to fail. The centre stays in the
+// frame instead (and the turn within half a turn), so a target that
+// reappears near where the motion led is found.
+TEST(RecoverySearch, ALongLostPeriodKeepsSearchingInsideTheFrame) {
+  host::Rng rng(12);
+  const auto pts = testing::random_points(rng, 80, 14);
+  const auto bytes = build(point_model(pts), "-4:4:9", "-4:4:9");
+  const TableView t = testing::open_table(bytes);
+  Scratch s(t);
+  std::vector<RoiPoint> search_features(search_feature_capacity(t));
+  const GrayImage frame = draw(pts, 140, 60);
+  RecoverySearch search(t, nullptr, detector_of(t));
+  search.reset();
+  MotionFilterState moving;
+  moving.vx = 3.0f;
+  moving.vtheta = 36000.0f / 340000.0f;  // 100 whole turns over the period
+  const LastSighting last{Pose{60, 60, 0, 0}, moving, 340000};
+  SearchResult r;
+  ASSERT_EQ(search.run(frame.view(), RecoveryOptions{}, last, 0, {s.view(), {}, search_features}, r), Status::kOk);
+  ASSERT_TRUE(r.searched);
+  EXPECT_LE(std::hypot(r.vote.pose.x - 140.0f, r.vote.pose.y - 60.0f), 1.0f);
+  EXPECT_LE(std::fabs(r.from.theta_deg), 180.0f + 9.0f + 1.0f);
+  EXPECT_GT(r.vote.score, 0.9f);
+}
+
 }  // namespace
 }  // namespace gabarit

@@ -1,5 +1,6 @@
 #include "gabarit/host/evaluation.hpp"
 
+#include <cctype>
 #include <cmath>
 #include <fstream>
 #include <map>
@@ -9,9 +10,35 @@
 
 namespace gabarit::host {
 
+namespace {
+
+// A whole field as a number: finite and within +-1e9 (so every error computed
+// from it is finite too), nothing after it.
+double finite_field(const std::string& f) {
+  std::size_t used = 0;
+  const double v = std::stod(f, &used);
+  if (used != f.size() || !std::isfinite(v) || std::fabs(v) > 1e9) throw std::invalid_argument("not a finite number");
+  return v;
+}
+
+// A whole field as an integer in [0, max].
+std::uint32_t count_field(const std::string& f, std::uint32_t max) {
+  if (f.empty() || !std::isdigit(static_cast<unsigned char>(f[0]))) throw std::invalid_argument("not a count");
+  std::size_t used = 0;
+  const unsigned long long v = std::stoull(f, &used);
+  if (used != f.size() || v > max) throw std::out_of_range("count out of range");
+  return static_cast<std::uint32_t>(v);
+}
+
+}  // namespace
+
 std::vector<PoseSample> read_pose_csv(const std::string& path) {
   std::ifstream in(path);
   if (!in) throw app::Error(path + ": cannot open");
+  return read_pose_csv(in, path);
+}
+
+std::vector<PoseSample> read_pose_csv(std::istream& in, const std::string& path) {
   std::string line;
   if (!std::getline(in, line) || line.rfind("frame,x,y,theta_deg,depth", 0) != 0) {
     throw app::Error(path + ":1: expected header starting 'frame,x,y,theta_deg,depth'");
@@ -19,6 +46,7 @@ std::vector<PoseSample> read_pose_csv(const std::string& path) {
   const bool has_visible = line.find(",visible") != std::string::npos;
   std::vector<PoseSample> out;
   for (std::size_t n = 2; std::getline(in, line); ++n) {
+    if (!line.empty() && line.back() == '\r') line.pop_back();
     if (line.empty()) continue;
     std::vector<std::string> fields;
     std::stringstream ss(line);
@@ -27,15 +55,16 @@ std::vector<PoseSample> read_pose_csv(const std::string& path) {
     try {
       if (fields.size() < 5) throw std::invalid_argument("too few fields");
       PoseSample s;
-      s.frame = static_cast<std::uint32_t>(std::stoul(fields[0]));
-      s.x = std::stod(fields[1]);
-      s.y = std::stod(fields[2]);
-      s.theta_deg = std::stod(fields[3]);
-      s.depth = static_cast<std::uint32_t>(std::stoul(fields[4]));
-      if (has_visible && fields.size() >= 6) s.visible = std::stoi(fields[5]) != 0;
+      s.frame = count_field(fields[0], 0xFFFFFFFFu);
+      s.x = finite_field(fields[1]);
+      s.y = finite_field(fields[2]);
+      s.theta_deg = finite_field(fields[3]);
+      s.depth = count_field(fields[4], 0xFFFFu);
+      if (has_visible && fields.size() >= 6) s.visible = count_field(fields[5], 1) != 0;
       out.push_back(s);
     } catch (const std::exception&) {
-      throw app::Error(path + ":" + std::to_string(n) + ": malformed row '" + line + "'");
+      throw app::Error(path + ":" + std::to_string(n) + ": malformed row '" + line.substr(0, 200) +
+                       "' (want frame,x,y,theta_deg,depth with a count, finite numbers and a depth count)");
     }
   }
   return out;

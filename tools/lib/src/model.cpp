@@ -1,6 +1,7 @@
 #include "gabarit/host/model.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <cstdio>
 #include <fstream>
 #include <sstream>
@@ -15,6 +16,10 @@ namespace gabarit::host {
 std::vector<Point> read_points_csv(const std::string& path) {
   std::ifstream in(path);
   if (!in) throw app::Error(path + ": cannot open");
+  return read_points_csv(in, path);
+}
+
+std::vector<Point> read_points_csv(std::istream& in, const std::string& path) {
   std::vector<Point> points;
   std::string line;
   std::size_t line_number = 0;
@@ -26,7 +31,9 @@ std::vector<Point> read_points_csv(const std::string& path) {
     char comma = 0, extra = 0;
     std::istringstream fields(line);
     if (!(fields >> x >> comma >> y) || comma != ',' || (fields >> extra)) {
-      if (points.empty() && line_number == 1) continue;  // header line
+      // A header: the first line, naming columns (letters), not a malformed point.
+      const bool names = std::any_of(line.begin(), line.end(), [](unsigned char ch) { return std::isalpha(ch) != 0; });
+      if (points.empty() && line_number == 1 && names) continue;
       throw app::Error(path + ":" + std::to_string(line_number) + ": expected integer 'x,y', got '" + line + "'");
     }
     if (x < -16384 || x > 16384 || y < -16384 || y > 16384) {

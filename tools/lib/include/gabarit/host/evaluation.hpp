@@ -2,6 +2,7 @@
 #pragma once
 
 #include <cstdint>
+#include <iosfwd>
 #include <string>
 #include <vector>
 
@@ -15,8 +16,11 @@ struct PoseSample {
 };
 
 // Reads POSES.csv (frame,x,y,theta_deg,depth,...) or gt.csv
-// (frame,x,y,theta_deg,depth,visible); the header line is required.
+// (frame,x,y,theta_deg,depth,visible); the header line is required. Frames
+// are counts up to 2^32 - 1, depths up to 65535, x, y, theta finite numbers
+// within +-1e9, visible 0 or 1; anything else is refused naming the line.
 std::vector<PoseSample> read_pose_csv(const std::string& path);
+std::vector<PoseSample> read_pose_csv(std::istream& in, const std::string& name);
 
 struct Accuracy {
   std::size_t frames = 0;          // visible ground-truth frames with a pose

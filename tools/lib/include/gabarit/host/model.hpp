@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <iosfwd>
 #include <string>
 #include <vector>
 
@@ -33,8 +34,10 @@ struct ModelStack {
 };
 
 // Points CSV: one integer "x,y" per line relative to the reference point; an
-// optional header line; blank lines and '#' comments ignored.
+// optional header line (the first line, with letters: "x,y"); blank lines and
+// '#' comments ignored; |x|, |y| <= 16384. Errors name the file and line.
 std::vector<Point> read_points_csv(const std::string& path);
+std::vector<Point> read_points_csv(std::istream& in, const std::string& name);
 void write_points_csv(const std::string& path, const std::vector<Point>& points);
 
 struct ImageModelOptions {
