@@ -41,12 +41,16 @@ constexpr std::array<SearchPlacement, kSearchPlacementCount> make_search_placeme
   return out;
 }
 constexpr std::array<SearchPlacement, kSearchPlacementCount> kSearchPlacements = make_search_placements();
+// Each (i, j, turn) once: one flag per grid position, linear time (clang
+// bounds the steps of a constant evaluation).
 constexpr bool all_distinct() {
-  for (std::size_t a = 0; a < kSearchPlacements.size(); ++a)
-    for (std::size_t b = a + 1; b < kSearchPlacements.size(); ++b)
-      if (kSearchPlacements[a].i == kSearchPlacements[b].i && kSearchPlacements[a].j == kSearchPlacements[b].j &&
-          kSearchPlacements[a].turn == kSearchPlacements[b].turn)
-        return false;
+  constexpr int kSide = 2 * kSearchRings + 1, kTurns = 2 * kSearchTurns + 1;
+  bool seen[kSide * kSide * kTurns] = {};
+  for (const SearchPlacement& p : kSearchPlacements) {
+    const int at = ((p.turn + kSearchTurns) * kSide + (p.j + kSearchRings)) * kSide + (p.i + kSearchRings);
+    if (seen[at]) return false;
+    seen[at] = true;
+  }
   return true;
 }
 static_assert(all_distinct() && kSearchPlacements[8].i == 1 && kSearchPlacements[8].j == 1 &&

@@ -6,6 +6,8 @@
 
 #include <gtest/gtest.h>
 
+#include <bit>
+
 #include <set>
 #include <vector>
 
@@ -161,6 +163,77 @@ TEST(TableView, RejectsCraftedHeadersWithAValidChecksum) {
     reseal(bad);
     EXPECT_EQ(open_copy(bad), e.expected) << e.what << ": got " << status_name(open_copy(bad));
   }
+}
+
+// Finite values that the kernel would later compute with past what it can
+// serve (table_format.hpp, "Limits"): each refused with a valid checksum.
+TEST(TableView, RejectsFieldsBeyondTheLimitsWithAValidChecksum) {
+  const auto good = small_table();  // binary, x -2..2, y -1..1
+  const std::uint32_t cells_at = load_le<std::uint32_t>(good.data() + off::kCellsOffset);
+  namespace co = table_format::cell_offset;
+  const auto f32 = [](float v) { return std::bit_cast<std::uint32_t>(v); };
+  const Edit edits[] = {
+      {"x axis beyond +-1024 px (the search grid's float-to-int overflow)", off::kAxisX + 4, f32(3.0e38f), 4, Status::kBadHeaderField},
+      {"theta axis beyond +-360 deg", off::kAxisTheta, f32(-400.0f), 4, Status::kBadHeaderField},
+      {"reference point beyond +-16384 px (depth by intensity's fixed point)", off::kModelRefX, f32(1.0e9f), 4, Status::kBadHeaderField},
+      {"a cell bound of 3e38 (poses of infinity)", cells_at + co::kXHi, f32(3.0e38f), 4, Status::kBadHeaderField},
+      {"a rotated-ROI window wider than 2048 px (gigabytes of scratch)", off::kRoiOriginX, static_cast<std::uint16_t>(-30000), 2,
+       Status::kCountTooLarge},
+      {"a gradient detector with threshold 0 (every frame would fail)", off::kDetectorKind, 1, 1, Status::kBadHeaderField},
+      {"a Canny detector with threshold 1 (its low threshold would be 0)", off::kDetectorKind, 2, 1, Status::kBadHeaderField},
+  };
+  for (const Edit& e : edits) {
+    auto bad = good;
+    std::byte* p = bad.data() + e.at;
+    if (e.width == 1) store_le<std::uint8_t>(p, static_cast<std::uint8_t>(e.value));
+    if (e.width == 2) store_le<std::uint16_t>(p, static_cast<std::uint16_t>(e.value));
+    if (e.width == 4) store_le<std::uint32_t>(p, e.value);
+    if (e.at == off::kDetectorKind) store_le<std::uint16_t>(bad.data() + off::kDetectorThreshold, e.value == 2 ? 1 : 0);
+    reseal(bad);
+    EXPECT_EQ(open_copy(bad), e.expected) << e.what << ": got " << status_name(open_copy(bad));
+  }
+  // A gradient threshold in range opens.
+  auto gradient = good;
+  store_le<std::uint8_t>(gradient.data() + off::kDetectorKind, 1);
+  store_le<std::uint16_t>(gradient.data() + off::kDetectorThreshold, 2040);
+  reseal(gradient);
+  EXPECT_EQ(open_copy(gradient), Status::kOk);
+}
+
+// The spec says each cell appears exactly stencil_size times. Moving one
+// unit of stencil size from one cell to another keeps the total (and the
+// maximum) right; the per-cell count still catches it. Accepted, the first
+// cell's score could pass 1 and a clutter frame report "tracking".
+TEST(TableView, RejectsACellReferencedOtherThanItsStencilSize) {
+  host::Rng rng(11);
+  const auto good = build(point_model(testing::random_points(rng, 12, 6)), "-2:2:5", "-1:1:3", "0:0:1", 0.5, 3);  // decimated
+  const std::uint32_t cells_at = load_le<std::uint32_t>(good.data() + off::kCellsOffset);
+  const TableView t = testing::open_table(good);
+  const auto below_max = [&](std::uint32_t c) { return t.stencil_size(c) > 0 && t.stencil_size(c) < t.max_stencil_size(); };
+  std::uint32_t a = 0;  // two cells strictly below the maximum stencil size
+  while (a < t.cell_count() && !below_max(a)) ++a;
+  std::uint32_t b = a + 1;
+  while (b < t.cell_count() && !below_max(b)) ++b;
+  ASSERT_LT(b, t.cell_count());
+  auto bad = good;
+  const std::size_t sa = cells_at + std::size_t{a} * table_format::kCellDescriptorBytes + table_format::cell_offset::kStencilSize;
+  const std::size_t sb = cells_at + std::size_t{b} * table_format::kCellDescriptorBytes + table_format::cell_offset::kStencilSize;
+  store_le<std::uint32_t>(bad.data() + sa, load_le<std::uint32_t>(bad.data() + sa) + 1);
+  store_le<std::uint32_t>(bad.data() + sb, load_le<std::uint32_t>(bad.data() + sb) - 1);
+  reseal(bad);
+  EXPECT_EQ(open_copy(bad), Status::kStencilSizeMismatch);
+}
+
+TEST(TableView, RefusesABufferLargerThanAnyValidTableBeforeItsChecksum) {
+  // A header declaring 1 GiB + 8 bytes over a buffer of that size: refused
+  // as too large, without reading (or checksumming) the rest.
+  const std::size_t n = std::size_t{table_format::kMaxTableBytes} + 8;
+  std::vector<std::byte> big(n);
+  const auto good = small_table();
+  std::copy(good.begin(), good.begin() + table_format::kHeaderBytes, big.begin());
+  store_le<std::uint32_t>(big.data() + off::kFileBytes, static_cast<std::uint32_t>(n));
+  TableView v;
+  EXPECT_EQ(TableView::open(big, v), Status::kCountTooLarge);
 }
 
 TEST(TableView, RejectsCraftedPayloadsWithAValidChecksum) {

@@ -15,6 +15,7 @@ packages=(
   linux-kbuild-6.1 cpio xz-utils  # the virtual board: gpio-sim built against the arm64 headers, its initramfs
   yosys nextpnr-ice40 fpga-icestorm  # hardware voter synthesis and place-and-route
   z3                      # the SMT solver behind yosys-smtbmc (formal proof of the FIFO)
+  clang-14 libfuzzer-14-dev libclang-rt-14-dev  # the fuzz preset: libFuzzer targets, clang's UBSan (float-cast-overflow)
 )
 # The board application's libgpiod for the cross targets, from Debian's
 # multi-arch packages.

@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
 # The whole test suite — the README's test command and what CI runs:
-#   1. host, Debug + AddressSanitizer + UBSan (every test, the CLI end to end)
+#   1. host, Debug + AddressSanitizer + UBSan (every test, the CLI end to end);
+#      then clang-14 with ASan + UBSan (float-cast-overflow too), every test
+#      again, plus the libFuzzer targets replaying their seed corpora
 #   2. host, Release (again, plus the no-heap proof, which replaces malloc)
 #      It also writes the cross-target test vectors (build/release/vectors)
 #      that the presets below replay, so it runs before them.
@@ -13,7 +15,7 @@ bash tools/scripts/setup-debian.sh
 logs=$(mktemp -d)
 trap 'rm -rf "$logs"' EXIT
 status=0 passed=0 failed=0
-for preset in dev release aarch64 armhf cortex-m7 cortex-m55; do
+for preset in dev fuzz release aarch64 armhf cortex-m7 cortex-m55; do
   echo "=== $preset ==="
   start=$SECONDS
   if cmake --workflow --preset "$preset" --fresh 2>&1 | tee "$logs/$preset.log"; then
