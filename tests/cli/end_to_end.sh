@@ -119,4 +119,68 @@ expect 2 "--search-budget" $g track --table "$s/t.gbt" --frames "$s/frames.y4m" 
 expect 2 "applies to --scene" $g synth --shape curve --depths 3 -o "$work/x"
 expect 2 "one of --shape and --scene" $g synth -o "$work/x"
 expect 2 "--translations" $g tables build --model "$s/model_00.pgm" --x 0:0:1 --y 0:0:1 --translations middle -o "$work/x.gbt"
+
+# Hardening: outputs never clobber inputs or a previous output, inputs are
+# bounded before they are allocated, frames stream from a pipe.
+cp "$work/a.gbt" "$work/keep.gbt"
+expect 2 "is also an input" $g track --table "$work/keep.gbt" --frames "$d/frames.y4m" --init "$init0" -o "$work/keep.gbt"
+cmp -s "$work/a.gbt" "$work/keep.gbt" || fail "track -o TABLE changed the table"
+cp "$d/frames.y4m" "$work/keep.y4m"
+expect 2 "is also an input" $g track --table "$work/a.gbt" --frames "$work/keep.y4m" --init "$init0" -o "$work/keep.y4m"
+cmp -s "$d/frames.y4m" "$work/keep.y4m" || fail "track -o FRAMES changed the frames"
+expect 2 "is also an input" $g track --table "$work/a.gbt" --frames "$d/frames.y4m" --init "$init0" --stats "$work/a.gbt"
+cp "$d/model.pgm" "$work/keep.pgm"
+expect 2 "is also an input" $g tables build --model "$work/keep.pgm" --binary --x 0:0:1 --y 0:0:1 -o "$work/keep.pgm"
+cmp -s "$d/model.pgm" "$work/keep.pgm" || fail "tables build -o MODEL changed the model"
+expect 2 "is also an input" $g synth --shape "$d/model.csv" --frames 2 -o "$d"
+# A failed run leaves the previous output as it was, and no temporary behind.
+cp "$work/one.csv" "$work/prev.csv"
+expect 1 "not a Y4M" $g track --table "$work/a.gbt" --frames "$d/gt.csv" --init "$init0" -o "$work/prev.csv"
+cmp -s "$work/one.csv" "$work/prev.csv" || fail "a failed track clobbered its previous output"
+cp "$work/a.gbt" "$work/prev.gbt"
+expect 1 "kept none" $g tables build --model-points "$d/model.csv" --binary --x -5:5:11 --y -5:5:11 --keep 1e-9 -o "$work/prev.gbt"
+cmp -s "$work/a.gbt" "$work/prev.gbt" || fail "a failed tables build clobbered the previous table"
+[ -z "$(find "$work" -maxdepth 1 -name '.*.tmp.*')" ] || fail "temporary files left behind: $(ls -a "$work")"
+# Frames from a pipe, standard input and a FIFO: the same poses as the file.
+$g track --table "$work/a.gbt" --frames - --init "$init0" --voter csr -o "$work/stdin.csv" < "$d/frames.y4m" 2>/dev/null || fail "track --frames -"
+cmp -s "$work/one.csv" "$work/stdin.csv" || fail "--frames - gave other poses"
+cat "$d/frames.y4m" | $g track --table "$work/a.gbt" --frames - --init "$init0" --voter csr > "$work/piped.csv" 2>/dev/null || fail "track from a pipe"
+cmp -s "$work/one.csv" "$work/piped.csv" || fail "a pipe gave other poses"
+mkfifo "$work/fifo"
+cat "$d/frames.y4m" > "$work/fifo" &
+$g track --table "$work/a.gbt" --frames "$work/fifo" --init "$init0" --voter csr -o "$work/fifo.csv" 2>/dev/null || fail "track from a FIFO"
+wait
+cmp -s "$work/one.csv" "$work/fifo.csv" || fail "a FIFO gave other poses"
+# Headers are checked before anything is allocated, and against the file.
+printf 'YUV4MPEG2 W32768 H32768 Cmono\nFRAME\n' > "$work/huge.y4m"
+expect 1 "bad Y4M width" $g track --table "$work/a.gbt" --frames "$work/huge.y4m" --init 1,1
+printf 'YUV4MPEG2 W8192 H8192 Cmono\nFRAME\nabc' > "$work/claims.y4m"
+expect 1 "frame 0: truncated (the header says 8192x8192" $g track --table "$work/a.gbt" --frames "$work/claims.y4m" --init 1,1
+printf 'P5\n16384 4096\n255\nabc' > "$work/claims.pgm"
+expect 1 "truncated PGM pixel data (the header says 16384x4096)" $g tables build --model "$work/claims.pgm" --binary --x 0:0:1 --y 0:0:1 -o "$work/x.gbt"
+printf 'YUV4MPEG2 W8 H8 C420p10\nFRAME\n' > "$work/p10.y4m"
+expect 1 "C420p10 not supported (8-bit only" $g track --table "$work/a.gbt" --frames "$work/p10.y4m" --init 1,1 -o "$work/p10.csv"
+[ ! -e "$work/p10.csv" ] || fail "a pose written before the colourspace error"
+printf 'YUV4MPEG2 W8 W9 H8 Cmono\n' > "$work/twice.y4m"
+expect 1 "gives W twice" $g track --table "$work/a.gbt" --frames "$work/twice.y4m" --init 1,1
+printf 'YUV4MPEG2 W8 H8 Cmono\r\nFRAME\n' > "$work/crlf.y4m"
+expect 1 "carriage return" $g track --table "$work/a.gbt" --frames "$work/crlf.y4m" --init 1,1
+{ printf 'P5 2 2 255 # comment\n'; printf 'abcd'; } > "$work/comment.pgm"
+expect 1 "a comment after maxval" $g tables build --model "$work/comment.pgm" --binary --x 0:0:1 --y 0:0:1 -o "$work/x.gbt"
+# Tables beyond the limits are refused when built, before the stencils.
+expect 1 "a table may reach at most 1023 px" $g tables build --model "$d/model.pgm" --binary --ref 16384,16384 --x 0:0:1 --y 0:0:1 -o "$work/x.gbt"
+expect 1 "would exceed" $g tables build --model-points "$d/model.csv" --binary --x -1000:1000:4096 --y -1000:1000:4096 -o "$work/x.gbt"
+expect 2 "must lie within +-1024 pixels" $g tables build --model-points "$d/model.csv" --binary --x -2000:0:3 --y 0:0:1 -o "$work/x.gbt"
+expect 2 "as 32-bit floats" $g tables build --model-points "$d/model.csv" --binary --x 1:1.00000001:2 --y 0:0:1 -o "$work/x.gbt"
+expect 1 "too small to store" $g tables build --model-points "$d/model.csv" --binary --x 0:0:1 --y 0:0:1 --keep 1e-300 -o "$work/x.gbt"
+# Readers of CSVs: no silently skipped first line, no NaN, no wrapped frame numbers.
+printf '10;20\n1,2\n' > "$work/semicolon.csv"
+expect 1 "semicolon.csv:1: expected integer" $g tables build --model-points "$work/semicolon.csv" --binary --x 0:0:1 --y 0:0:1 -o "$work/x.gbt"
+printf 'frame,x,y,theta_deg,depth\n0,nan,1,0,0\n' > "$work/nan.csv"
+expect 1 "nan.csv:2: malformed row" $g eval --poses "$work/nan.csv" --gt "$d/gt.csv"
+printf 'frame,x,y,theta_deg,depth\n4294967296,1,1,0,0\n' > "$work/wrap.csv"
+expect 1 "wrap.csv:2: malformed row" $g eval --poses "$work/wrap.csv" --gt "$d/gt.csv"
+printf 'frame,x,y,theta_deg,depth\n-1,1,1,0,0\n' > "$work/negative.csv"
+expect 1 "negative.csv:2: malformed row" $g eval --poses "$work/negative.csv" --gt "$d/gt.csv"
+expect 2 "want WxH with 8 <= W,H <= 8192" $g synth --shape curve --size 4294967304x8 -o "$work/x"
 echo "1 passed, 0 failed"
