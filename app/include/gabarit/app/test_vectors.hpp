@@ -9,7 +9,7 @@
 //                and the vote it searched (the format below).
 //
 // Like the kernel this reader never allocates, so the same code runs in the
-// firmware on a const array in flash and on the host on a mapped file.
+// firmware on a const array in flash and on the host on a file read into memory.
 //
 // Format (little-endian; docs/file-formats.md):
 //   header   40 bytes  magic "GBVECT01", u32 frame_count, u32 width, u32 height,
