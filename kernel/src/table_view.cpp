@@ -58,7 +58,7 @@ Status check_references(const std::byte* offsets, const std::byte* refs, std::ui
 template <class Ref>
 Status check_stencil_counts(const std::byte* offsets, const std::byte* refs, const std::byte* cells, std::uint32_t pixels,
                             std::uint32_t cell_count) noexcept {
-  constexpr std::uint32_t kChunk = 128;
+  constexpr std::uint32_t kChunk = 512;  // 2 KiB of stack
   for (std::uint32_t first = 0; first < cell_count; first += kChunk) {
     const std::uint32_t last = cell_count - first < kChunk ? cell_count : first + kChunk;
     std::uint32_t counts[kChunk] = {};
