@@ -47,6 +47,45 @@ std::uint64_t load_field(const std::byte* record, const Field& f) noexcept {
   }
 }
 
+// The first 40 bytes both formats share: magic, frame count, width, height,
+// detector kind, a byte of the format's own (21), detector threshold, the
+// initial pose, and a u16 of the format's own (38).
+void store_common(std::byte* p, const char (&magic)[8], std::uint32_t frames, std::uint32_t width, std::uint32_t height,
+                  const Detector& detector, const Pose& init) noexcept {
+  std::memcpy(p, magic, sizeof(magic));
+  store_le<std::uint32_t>(p + 8, frames);
+  store_le<std::uint32_t>(p + 12, width);
+  store_le<std::uint32_t>(p + 16, height);
+  p[20] = static_cast<std::byte>(detector.kind);
+  store_le<std::uint16_t>(p + 22, detector.threshold);
+  store_le<float>(p + 24, init.x);
+  store_le<float>(p + 28, init.y);
+  store_le<float>(p + 32, init.theta_deg);
+  store_le<std::uint16_t>(p + 36, init.depth);
+}
+
+// Reads the shared fields; false if the counts, sizes or detector are out of range.
+template <class Set>
+bool load_common(const std::byte* p, Set& set) noexcept {
+  set.frame_count = load_le<std::uint32_t>(p + 8);
+  set.width = load_le<std::uint32_t>(p + 12);
+  set.height = load_le<std::uint32_t>(p + 16);
+  const std::uint8_t kind = std::to_integer<std::uint8_t>(p[20]);
+  set.detector.kind = static_cast<table_format::DetectorKind>(kind);
+  set.detector.threshold = load_le<std::uint16_t>(p + 22);
+  set.init = {load_le<float>(p + 24), load_le<float>(p + 28), load_le<float>(p + 32), load_le<std::uint16_t>(p + 36)};
+  return set.frame_count > 0 && set.frame_count <= 100000 && set.width > 0 && set.width <= 8192 && set.height > 0 &&
+         set.height <= 8192 && kind <= static_cast<std::uint8_t>(table_format::DetectorKind::kCanny);
+}
+
+// The file is exactly `size` bytes and its trailer is the CRC of the rest.
+Status check_size_and_crc(std::span<const std::byte> bytes, std::size_t size) noexcept {
+  if (bytes.size() < size) return Status::kTruncated;
+  if (bytes.size() != size) return Status::kSizeMismatch;
+  const std::size_t body = size - kTrailerBytes;
+  return crc32(bytes.first(body)) == load_le<std::uint32_t>(bytes.data() + body) ? Status::kOk : Status::kBadChecksum;
+}
+
 // The first field where two records differ, or false.
 template <std::size_t N>
 bool first_difference(const std::byte* expected, const std::byte* actual, const Field (&fields)[N], std::uint32_t frame,
@@ -70,28 +109,9 @@ bool first_difference(const std::byte* expected, const std::byte* actual, const 
 Status open_vectors(std::span<const std::byte> bytes, VectorSet& out) noexcept {
   if (bytes.size() < kHeaderBytes + kTrailerBytes) return Status::kTruncated;
   if (std::memcmp(bytes.data(), kMagic, sizeof(kMagic)) != 0) return Status::kBadMagic;
-  const std::byte* p = bytes.data();
   VectorSet set;
-  set.frame_count = load_le<std::uint32_t>(p + 8);
-  set.width = load_le<std::uint32_t>(p + 12);
-  set.height = load_le<std::uint32_t>(p + 16);
-  if (set.frame_count == 0 || set.frame_count > 100000 || set.width == 0 || set.width > 8192 || set.height == 0 ||
-      set.height > 8192) {
-    return Status::kBadHeaderField;
-  }
-  const std::uint8_t kind = std::to_integer<std::uint8_t>(p[20]);
-  if (kind > static_cast<std::uint8_t>(table_format::DetectorKind::kCanny)) return Status::kBadHeaderField;
-  set.detector.kind = static_cast<table_format::DetectorKind>(kind);
-  set.detector.threshold = load_le<std::uint16_t>(p + 22);
-  set.init.x = load_le<float>(p + 24);
-  set.init.y = load_le<float>(p + 28);
-  set.init.theta_deg = load_le<float>(p + 32);
-  set.init.depth = load_le<std::uint16_t>(p + 36);
-  const std::size_t size = file_bytes(set.frame_count, set.width, set.height);
-  if (bytes.size() < size) return Status::kTruncated;
-  if (bytes.size() != size) return Status::kSizeMismatch;
-  const std::size_t body = size - kTrailerBytes;
-  if (crc32(bytes.first(body)) != load_le<std::uint32_t>(p + body)) return Status::kBadChecksum;
+  if (!load_common(bytes.data(), set)) return Status::kBadHeaderField;
+  GABARIT_TRY(check_size_and_crc(bytes, file_bytes(set.frame_count, set.width, set.height)));
   const std::size_t pixels = std::size_t{set.frame_count} * set.width * set.height;
   set.frames = bytes.subspan(kHeaderBytes, pixels);
   set.expected = bytes.subspan(kHeaderBytes + pixels, std::size_t{set.frame_count} * kRecordBytes);
@@ -100,18 +120,8 @@ Status open_vectors(std::span<const std::byte> bytes, VectorSet& out) noexcept {
 }
 
 void encode_header(const VectorSet& set, std::span<std::byte, kHeaderBytes> out) noexcept {
-  std::byte* p = out.data();
-  std::memset(p, 0, kHeaderBytes);
-  std::memcpy(p, kMagic, sizeof(kMagic));
-  store_le<std::uint32_t>(p + 8, set.frame_count);
-  store_le<std::uint32_t>(p + 12, set.width);
-  store_le<std::uint32_t>(p + 16, set.height);
-  p[20] = static_cast<std::byte>(set.detector.kind);
-  store_le<std::uint16_t>(p + 22, set.detector.threshold);
-  store_le<float>(p + 24, set.init.x);
-  store_le<float>(p + 28, set.init.y);
-  store_le<float>(p + 32, set.init.theta_deg);
-  store_le<std::uint16_t>(p + 36, set.init.depth);
+  std::memset(out.data(), 0, kHeaderBytes);
+  store_common(out.data(), kMagic, set.frame_count, set.width, set.height, set.detector, set.init);
 }
 
 void encode_record(const StepResult& step, std::span<std::byte, kRecordBytes> out) noexcept {
@@ -139,13 +149,8 @@ Status open_session_vectors(std::span<const std::byte> bytes, SessionVectorSet& 
   if (std::memcmp(bytes.data(), kSessionMagic, sizeof(kSessionMagic)) != 0) return Status::kBadMagic;
   const std::byte* p = bytes.data();
   SessionVectorSet set;
-  set.frame_count = load_le<std::uint32_t>(p + 8);
-  set.width = load_le<std::uint32_t>(p + 12);
-  set.height = load_le<std::uint32_t>(p + 16);
-  const std::uint8_t kind = std::to_integer<std::uint8_t>(p[20]);
+  const bool common_ok = load_common(p, set);
   const std::uint8_t flags = std::to_integer<std::uint8_t>(p[21]);
-  set.detector.threshold = load_le<std::uint16_t>(p + 22);
-  set.init = {load_le<float>(p + 24), load_le<float>(p + 28), load_le<float>(p + 32), load_le<std::uint16_t>(p + 36)};
   set.stack_depths = load_le<std::uint16_t>(p + 38);
   set.stack_width = load_le<std::uint32_t>(p + 40);
   set.stack_height = load_le<std::uint32_t>(p + 44);
@@ -163,18 +168,11 @@ Status open_session_vectors(std::span<const std::byte> bytes, SessionVectorSet& 
   const bool stack_ok = set.stack_depths == 0 ||
                         (set.stack_depths <= kMaxStackDepths && set.stack_width > 0 && set.stack_width <= 8192 &&
                          set.stack_height > 0 && set.stack_height <= 8192);
-  if (set.frame_count == 0 || set.frame_count > 100000 || set.width == 0 || set.width > 8192 || set.height == 0 ||
-      set.height > 8192 || kind > static_cast<std::uint8_t>(table_format::DetectorKind::kCanny) || (flags & ~7u) != 0 ||
-      !stack_ok || !valid(set.options.recovery) || load_le<std::uint32_t>(p + 76) != 0) {
+  if (!common_ok || (flags & ~7u) != 0 || !stack_ok || !valid(set.options.recovery) || load_le<std::uint32_t>(p + 76) != 0) {
     return Status::kBadHeaderField;
   }
-  set.detector.kind = static_cast<table_format::DetectorKind>(kind);
-  const std::size_t size =
-      session_file_bytes(set.frame_count, set.width, set.height, set.stack_depths, set.stack_width, set.stack_height);
-  if (bytes.size() < size) return Status::kTruncated;
-  if (bytes.size() != size) return Status::kSizeMismatch;
-  const std::size_t body = size - kTrailerBytes;
-  if (crc32(bytes.first(body)) != load_le<std::uint32_t>(p + body)) return Status::kBadChecksum;
+  GABARIT_TRY(check_size_and_crc(
+      bytes, session_file_bytes(set.frame_count, set.width, set.height, set.stack_depths, set.stack_width, set.stack_height)));
   const std::size_t stack = std::size_t{set.stack_depths} * set.stack_width * set.stack_height;
   const std::size_t pixels = std::size_t{set.frame_count} * set.width * set.height;
   set.stack = bytes.subspan(kSessionHeaderBytes, stack);
@@ -187,18 +185,9 @@ Status open_session_vectors(std::span<const std::byte> bytes, SessionVectorSet& 
 void encode_session_header(const SessionVectorSet& set, std::span<std::byte, kSessionHeaderBytes> out) noexcept {
   std::byte* p = out.data();
   std::memset(p, 0, kSessionHeaderBytes);
-  std::memcpy(p, kSessionMagic, sizeof(kSessionMagic));
-  store_le<std::uint32_t>(p + 8, set.frame_count);
-  store_le<std::uint32_t>(p + 12, set.width);
-  store_le<std::uint32_t>(p + 16, set.height);
-  p[20] = static_cast<std::byte>(set.detector.kind);
+  store_common(p, kSessionMagic, set.frame_count, set.width, set.height, set.detector, set.init);
   p[21] = static_cast<std::byte>((set.options.motion_filter ? 1u : 0u) | (set.options.refine ? 2u : 0u) |
                                  (set.options.recover ? 4u : 0u));
-  store_le<std::uint16_t>(p + 22, set.detector.threshold);
-  store_le<float>(p + 24, set.init.x);
-  store_le<float>(p + 28, set.init.y);
-  store_le<float>(p + 32, set.init.theta_deg);
-  store_le<std::uint16_t>(p + 36, set.init.depth);
   store_le<std::uint16_t>(p + 38, set.stack_depths);
   store_le<std::uint32_t>(p + 40, set.stack_width);
   store_le<std::uint32_t>(p + 44, set.stack_height);
