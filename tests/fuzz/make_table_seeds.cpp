@@ -1,6 +1,6 @@
 // make_table_seeds OUTDIR: the table fuzz target's seed corpus. Valid tables
 // of every kind the builder makes (binary and gradient detectors, rotation,
-// several depths, decimated, one- and two-byte references), and for every
+// several depths, decimated, one-, two- and four-byte references), and for every
 // error TableView::open can report one table that reports it. Exits non-zero
 // if an error code is not reached, so the corpus provably reaches them all.
 #include <cstdio>
@@ -71,6 +71,7 @@ int main(int argc, char** argv) {
       {"depths", build(curve, 3, "-1:1:3", "0:0:1", canny, 30, 1.0)},
       {"decimated", build(curve, 1, "-3:3:7", "0:0:1", binary, 0, 0.3)},
       {"two-byte-refs", build(curve, 1, "-8:8:17", "0:0:1", binary, 0, 1.0)},
+      {"four-byte-refs", build({{0, 0}}, 1, "-128:128:257", "0:0:1", binary, 0, 1.0)},  // 66,049 cells
   };
   std::map<Status, std::vector<std::byte>> errors;
   const std::vector<std::byte>& base = valid[0].second;
