@@ -161,6 +161,7 @@ Status open_session_vectors(std::span<const std::byte> bytes, SessionVectorSet& 
   set.options.motion_filter = (flags & 1u) != 0;
   set.options.refine = (flags & 2u) != 0;
   set.options.recover = (flags & 4u) != 0;
+  set.shared_search_features = (flags & 8u) != 0;
   set.options.recovery.turn_deg = load_le<float>(p + 60);
   set.options.recovery.budget = load_le<std::uint32_t>(p + 64);
   set.options.recovery.interval = load_le<std::uint32_t>(p + 68);
@@ -168,7 +169,7 @@ Status open_session_vectors(std::span<const std::byte> bytes, SessionVectorSet& 
   const bool stack_ok = set.stack_depths == 0 ||
                         (set.stack_depths <= kMaxStackDepths && set.stack_width > 0 && set.stack_width <= 8192 &&
                          set.stack_height > 0 && set.stack_height <= 8192);
-  if (!common_ok || (flags & ~7u) != 0 || !stack_ok || !valid(set.options.recovery) || load_le<std::uint32_t>(p + 76) != 0) {
+  if (!common_ok || (flags & ~15u) != 0 || !stack_ok || !valid(set.options.recovery) || load_le<std::uint32_t>(p + 76) != 0) {
     return Status::kBadHeaderField;
   }
   GABARIT_TRY(check_size_and_crc(
@@ -187,7 +188,7 @@ void encode_session_header(const SessionVectorSet& set, std::span<std::byte, kSe
   std::memset(p, 0, kSessionHeaderBytes);
   store_common(p, kSessionMagic, set.frame_count, set.width, set.height, set.detector, set.init);
   p[21] = static_cast<std::byte>((set.options.motion_filter ? 1u : 0u) | (set.options.refine ? 2u : 0u) |
-                                 (set.options.recover ? 4u : 0u));
+                                 (set.options.recover ? 4u : 0u) | (set.shared_search_features ? 8u : 0u));
   store_le<std::uint16_t>(p + 38, set.stack_depths);
   store_le<std::uint32_t>(p + 40, set.stack_width);
   store_le<std::uint32_t>(p + 44, set.stack_height);
@@ -220,6 +221,11 @@ Status check_session_vectors(const TableView& table, const SessionVectorSet& set
                              std::span<ImageView> stack_views, Report& report) noexcept {
   report = Report{};
   if (stack_views.size() < set.stack_depths) return Status::kBufferTooSmall;
+  if (!set.shared_search_features) {
+    scratch.search_features = {};
+  } else if (scratch.search_features.size() < search_feature_capacity(table)) {
+    return Status::kBufferTooSmall;
+  }
   TrackingSession session(table, nullptr, set.detector);
   GABARIT_TRY(session.start(set.options, set.init));
   FocusStack stack;

@@ -1,5 +1,5 @@
-// gabarit-vector-replay TABLE VECTORS [SESSION]: replays the cross-target test
-// vectors (and the session vectors) on this machine (x86-64, or aarch64/armhf
+// gabarit-vector-replay TABLE VECTORS [SESSION ...]: replays the cross-target
+// test vectors (and session vectors) on this machine (x86-64, or aarch64/armhf
 // under qemu-user) and exits 0 only if every pose and vote count is
 // bit-identical to the host's.
 #include <cstdio>
@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "gabarit/app/test_vectors.hpp"
+#include "gabarit/recovery_search.hpp"
 #include "gabarit/table_view.hpp"
 #include "gabarit/tracker.hpp"
 
@@ -27,14 +28,13 @@ bool read_file(const char* path, std::vector<std::byte>& out) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc != 3 && argc != 4) {
-    std::fprintf(stderr, "usage: gabarit-vector-replay TABLE.gbt VECTORS.gbv [SESSION.gbs]   (from `gabarit vectors`)\n");
+  if (argc < 3) {
+    std::fprintf(stderr, "usage: gabarit-vector-replay TABLE.gbt VECTORS.gbv [SESSION.gbs ...]   (from `gabarit vectors`)\n");
     return 2;
   }
-  std::vector<std::byte> table_bytes, vector_bytes, session_bytes;
-  for (const auto& [path, bytes] :
-       {std::pair{argv[1], &table_bytes}, std::pair{argv[2], &vector_bytes}, std::pair{argc > 3 ? argv[3] : nullptr, &session_bytes}}) {
-    if (path != nullptr && !read_file(path, *bytes)) {
+  std::vector<std::byte> table_bytes, vector_bytes;
+  for (const auto& [path, bytes] : {std::pair{argv[1], &table_bytes}, std::pair{argv[2], &vector_bytes}}) {
+    if (!read_file(path, *bytes)) {
       std::fprintf(stderr, "gabarit-vector-replay: cannot read %s (the release preset writes build/release/vectors)\n", path);
       return 1;
     }
@@ -68,24 +68,34 @@ int main(int argc, char** argv) {
   }
   std::printf("PASS: %u frames %ux%u, poses and votes bit-identical to the host\n", report.frames_checked, set.width,
               set.height);
-  if (argc < 4) return 0;
-  gabarit::vectors::SessionVectorSet session;
-  if (auto s = gabarit::vectors::open_session_vectors(session_bytes, session); s != gabarit::Status::kOk) {
-    std::fprintf(stderr, "gabarit-vector-replay: %s: %s\n", argv[3], gabarit::status_name(s));
-    return 1;
+  // The session vectors: with or without the recovery's shared search features.
+  std::vector<gabarit::RoiPoint> search_features(gabarit::search_feature_capacity(table));
+  for (int i = 3; i < argc; ++i) {
+    std::vector<std::byte> session_bytes;
+    gabarit::vectors::SessionVectorSet session;
+    if (!read_file(argv[i], session_bytes)) {
+      std::fprintf(stderr, "gabarit-vector-replay: cannot read %s\n", argv[i]);
+      return 1;
+    }
+    if (auto s = gabarit::vectors::open_session_vectors(session_bytes, session); s != gabarit::Status::kOk) {
+      std::fprintf(stderr, "gabarit-vector-replay: %s: %s\n", argv[i], gabarit::status_name(s));
+      return 1;
+    }
+    std::vector<gabarit::ImageView> stack_views(session.stack_depths);
+    if (auto s = gabarit::vectors::check_session_vectors(table, session, {{features, counters, mask}, {}, search_features},
+                                                         stack_views, report);
+        s != gabarit::Status::kOk) {
+      std::fprintf(stderr, "gabarit-vector-replay: %s: session: %s\n", argv[i], gabarit::status_name(s));
+      return 1;
+    }
+    if (!report.match) {
+      std::printf("FAIL: %s: session frame %u field %s: expected 0x%llx, got 0x%llx\n", argv[i], report.frame, report.field,
+                  static_cast<unsigned long long>(report.expected), static_cast<unsigned long long>(report.actual));
+      return 1;
+    }
+    std::printf("PASS: session%s, %u frames %ux%u with %u focus-stack images: poses, confidence and votes bit-identical to the host\n",
+                session.shared_search_features ? " (recovery screened from shared features)" : "", report.frames_checked,
+                session.width, session.height, unsigned{session.stack_depths});
   }
-  std::vector<gabarit::ImageView> stack_views(session.stack_depths);
-  if (auto s = gabarit::vectors::check_session_vectors(table, session, {{features, counters, mask}, {}, {}}, stack_views, report);
-      s != gabarit::Status::kOk) {
-    std::fprintf(stderr, "gabarit-vector-replay: session: %s\n", gabarit::status_name(s));
-    return 1;
-  }
-  if (!report.match) {
-    std::printf("FAIL: session frame %u field %s: expected 0x%llx, got 0x%llx\n", report.frame, report.field,
-                static_cast<unsigned long long>(report.expected), static_cast<unsigned long long>(report.actual));
-    return 1;
-  }
-  std::printf("PASS: session, %u frames %ux%u with %u focus-stack images: poses, confidence and votes bit-identical to the host\n",
-              report.frames_checked, session.width, session.height, unsigned{session.stack_depths});
   return 0;
 }

@@ -77,9 +77,9 @@ class TestVectors : public ::testing::Test {
     const TableView& table = aligned.view;
     vectors::SessionVectorSet set;
     GABARIT_TRY(vectors::open_session_vectors(file, set));
-    app::TrackerBuffers buffers(table, app::VoterChoice::kCsr);
+    app::SessionBuffers buffers(table, nullptr, app::VoterChoice::kCsr, true);
     std::vector<ImageView> stack(set.stack_depths);
-    return vectors::check_session_vectors(table, set, {buffers.scratch(), {}, {}}, stack, report);
+    return vectors::check_session_vectors(table, set, buffers.scratch(), stack, report);
   }
 
   static inline std::filesystem::path dir_;
@@ -90,6 +90,7 @@ TEST_F(TestVectors, SameOptionsWriteTheSameBytes) {
   EXPECT_EQ(read_bytes(dir_ / "a" / "table.gbt"), read_bytes(dir_ / "b" / "table.gbt"));
   EXPECT_EQ(read_bytes(dir_ / "a" / "vectors.gbv"), read_bytes(dir_ / "b" / "vectors.gbv"));
   EXPECT_EQ(read_bytes(dir_ / "a" / "session.gbs"), read_bytes(dir_ / "b" / "session.gbs"));
+  EXPECT_EQ(read_bytes(dir_ / "a" / "session-screened.gbs"), read_bytes(dir_ / "b" / "session-screened.gbs"));
 }
 
 // The session's sequence exercises what the session adds: the target is
@@ -101,6 +102,25 @@ TEST_F(TestVectors, TheSessionReplaysExactlyThroughALostPeriod) {
   ASSERT_EQ(replay_session(read_bytes(dir_ / "a" / "session.gbs"), report), Status::kOk);
   EXPECT_TRUE(report.match) << "frame " << report.frame << " field " << report.field;
   EXPECT_EQ(report.frames_checked, 14u);
+}
+
+// The same sequence with the recovery screened from shared search features
+// (the hosted default): replayed exactly, and refused without the scratch.
+TEST_F(TestVectors, TheScreenedSessionReplaysExactlyAndNeedsItsScratch) {
+  const auto file = read_bytes(dir_ / "a" / "session-screened.gbs");
+  vectors::SessionVectorSet set;
+  ASSERT_EQ(vectors::open_session_vectors(file, set), Status::kOk);
+  EXPECT_TRUE(set.shared_search_features);
+  vectors::Report report;
+  ASSERT_EQ(replay_session(file, report), Status::kOk);
+  EXPECT_TRUE(report.match) << "frame " << report.frame << " field " << report.field;
+  EXPECT_EQ(report.frames_checked, 14u);
+  AlignedTable aligned;
+  app::TrackerBuffers tracker(aligned.view, app::VoterChoice::kCsr);
+  std::vector<ImageView> stack(set.stack_depths);
+  EXPECT_EQ(vectors::check_session_vectors(aligned.view, set, {tracker.scratch(), {}, {}}, stack, report), Status::kBufferTooSmall);
+  // The two recordings differ: the screened search is a different computation.
+  EXPECT_NE(file, read_bytes(dir_ / "a" / "session.gbs"));
 }
 
 TEST_F(TestVectors, ADifferentSessionResultIsReportedWithFrameAndField) {
@@ -128,7 +148,7 @@ TEST_F(TestVectors, DamagedSessionFilesAreRefused) {
   EXPECT_EQ(vectors::open_session_vectors(flipped, set), Status::kBadChecksum);
   EXPECT_EQ(vectors::open_session_vectors(std::span(good).first(good.size() - 1), set), Status::kTruncated);
   auto flags = good;
-  flags[21] = std::byte{0x08};  // an unknown option flag
+  flags[21] = std::byte{0x10};  // an unknown option flag
   reseal(flags);
   EXPECT_EQ(vectors::open_session_vectors(flags, set), Status::kBadHeaderField);
   auto interval = good;

@@ -17,6 +17,7 @@
 #include "gabarit/host/rng.hpp"
 #include "gabarit/host/synth.hpp"
 #include "gabarit/host/table_builder.hpp"
+#include "gabarit/recovery_search.hpp"
 #include "gabarit/tracking_session.hpp"
 
 namespace gabarit::host {
@@ -185,37 +186,48 @@ VectorSceneSummary write_test_vectors(const VectorSceneOptions& o, const std::st
     std::copy_n(reinterpret_cast<const std::byte*>(image.pixels.data()), image.pixels.size(),
                 session_file.begin() + static_cast<std::ptrdiff_t>(frames_at + std::size_t{f} * side * side));
   }
-  {
-    std::vector<ImageView> views;
-    for (const app::GrayImage& image : stack_images) views.push_back(image.view());
-    const FocusStack stack{views, session.stack_ref_x, session.stack_ref_y, session.stack_step};
+  // The host's session results, recorded twice: each recovery placement a
+  // full track_step (session.gbs), and screened from shared search features
+  // (session-screened.gbs). Same frames, same stack.
+  std::vector<ImageView> views;
+  for (const app::GrayImage& image : stack_images) views.push_back(image.view());
+  const FocusStack stack{views, session.stack_ref_x, session.stack_ref_y, session.stack_step};
+  std::vector<RoiPoint> search_features(search_feature_capacity(table));
+  const auto record = [&](bool shared) {
+    session.shared_search_features = shared;
+    std::vector<std::byte> out = session_file;
     TrackingSession tracker(table, nullptr, session.detector);
     if (const Status s = tracker.start(session.options, session.init); s != Status::kOk)
       throw app::Error(std::string("vectors: session start failed: ") + status_name(s));
     tracker.use_focus_stack(&stack);
-    const SessionScratch scratch{buffers.scratch(), {}, {}};  // each recovery placement a full track_step
+    const SessionScratch scratch{buffers.scratch(), {}, shared ? std::span<RoiPoint>(search_features) : std::span<RoiPoint>()};
+    summary.session_lost_frames = 0;
+    summary.session_reacquired = false;
     for (std::uint32_t f = 0; f < session.frame_count; ++f) {
-      const ImageView view{reinterpret_cast<const std::uint8_t*>(session_file.data()) + frames_at + std::size_t{f} * side * side,
-                           side, side, side};
+      const ImageView view{reinterpret_cast<const std::uint8_t*>(out.data()) + frames_at + std::size_t{f} * side * side, side,
+                           side, side};
       SessionResult result;
       if (const Status s = tracker.step(view, scratch, result); s != Status::kOk)
         throw app::Error(std::string("vectors: session step failed: ") + status_name(s));
       vectors::encode_session_record(result, std::span<std::byte, vectors::kSessionRecordBytes>(
-                                                 session_file.data() + session_records_at + std::size_t{f} * vectors::kSessionRecordBytes,
+                                                 out.data() + session_records_at + std::size_t{f} * vectors::kSessionRecordBytes,
                                                  vectors::kSessionRecordBytes));
       summary.session_lost_frames += result.state == TrackState::kLost;
       summary.session_reacquired = summary.session_reacquired || result.reacquired;
     }
-  }
-  vectors::encode_session_header(session, std::span<std::byte, vectors::kSessionHeaderBytes>(session_file.data(),
-                                                                                             vectors::kSessionHeaderBytes));
-  const std::size_t session_body = session_file.size() - vectors::kTrailerBytes;
-  store_le<std::uint32_t>(session_file.data() + session_body, crc32(std::span<const std::byte>(session_file.data(), session_body)));
+    vectors::encode_session_header(session, std::span<std::byte, vectors::kSessionHeaderBytes>(out.data(), vectors::kSessionHeaderBytes));
+    const std::size_t body = out.size() - vectors::kTrailerBytes;
+    store_le<std::uint32_t>(out.data() + body, crc32(std::span<const std::byte>(out.data(), body)));
+    return out;
+  };
+  const std::vector<std::byte> screened_file = record(true);
+  session_file = record(false);  // its summary is the one reported
 
   std::filesystem::create_directories(dir);
   app::write_file((std::filesystem::path(dir) / "table.gbt").string(), table_bytes);
   app::write_file((std::filesystem::path(dir) / "vectors.gbv").string(), file);
   app::write_file((std::filesystem::path(dir) / "session.gbs").string(), session_file);
+  app::write_file((std::filesystem::path(dir) / "session-screened.gbs").string(), screened_file);
   summary.session_bytes = session_file.size();
   summary.model_points = model.depths[0].size();
   summary.table_bytes = table_bytes.size();

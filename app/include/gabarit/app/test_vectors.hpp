@@ -88,7 +88,8 @@ Status check_vectors(const TableView& table, const VectorSet& set, TrackerScratc
 // Session vectors (docs/file-formats.md), little-endian:
 //   header   80 bytes  magic "GBSESS01", u32 frame_count, u32 width, u32 height,
 //                      u8 detector kind, u8 flags (1 motion filter, 2 refine,
-//                      4 recover), u16 detector threshold, f32 init x, y,
+//                      4 recover, 8 recovery screened from shared search
+//                      features), u16 detector threshold, f32 init x, y,
 //                      theta_deg, u16 init depth, u16 stack depth count (0:
 //                      no focus stack), u32 stack width, u32 stack height,
 //                      f32 stack ref x, f32 stack ref y, u32 stack step,
@@ -101,9 +102,11 @@ Status check_vectors(const TableView& table, const VectorSet& set, TrackerScratc
 //            u8 confidence, u8 state, f32 score, u8 reacquired,
 //            u8 searched_coarse, u16 0
 //   trailer  u32 CRC-32 of every byte before it
-// The session runs with the default MotionFilterParams and without shared
-// search features (each recovery placement a full track_step), the mode a
-// part short of RAM runs.
+// The session runs with the default MotionFilterParams. Recovery either
+// votes each placement with a full track_step (the mode a part short of RAM
+// runs: session.gbs, replayed everywhere, firmware included) or screens them
+// from features detected once (flag 8: session-screened.gbs, the hosted
+// default, replayed on the Linux targets).
 inline constexpr char kSessionMagic[8] = {'G', 'B', 'S', 'E', 'S', 'S', '0', '1'};
 inline constexpr std::size_t kSessionHeaderBytes = 80;
 inline constexpr std::size_t kSessionRecordBytes = kRecordBytes + 24;
@@ -123,6 +126,7 @@ struct SessionVectorSet {
   Detector detector;
   Pose init;
   SessionOptions options;             // motion_filter, refine, recover and recovery from the file
+  bool shared_search_features = false;  // recovery screened from features detected once (flag 8)
   std::uint16_t stack_depths = 0;
   std::uint32_t stack_width = 0, stack_height = 0;
   float stack_ref_x = 0.0f, stack_ref_y = 0.0f;
@@ -147,8 +151,10 @@ void encode_session_record(const SessionResult& result, std::span<std::byte, kSe
 
 // Replays the session from the initial pose and compares every field of
 // every record. `stack_views` holds at least set.stack_depths entries (the
-// caller's storage for the focus stack's views). Status errors are the
-// session's; a mismatch is described in `report`.
+// caller's storage for the focus stack's views); with flag 8,
+// scratch.search_features must hold search_feature_capacity(table) entries
+// (else kBufferTooSmall), and without it they are not used. Status errors are
+// the session's; a mismatch is described in `report`.
 Status check_session_vectors(const TableView& table, const SessionVectorSet& set, SessionScratch scratch,
                              std::span<ImageView> stack_views, Report& report) noexcept;
 
