@@ -157,7 +157,7 @@ Status open_session_vectors(std::span<const std::byte> bytes, SessionVectorSet& 
   set.stack_ref_x = load_le<float>(p + 48);
   set.stack_ref_y = load_le<float>(p + 52);
   set.stack_step = load_le<std::uint32_t>(p + 56);
-  set.options = kPlainSession;
+  set.options = SessionOptions{};  // the defaults, then what the file records
   set.options.motion_filter = (flags & 1u) != 0;
   set.options.refine = (flags & 2u) != 0;
   set.options.recover = (flags & 4u) != 0;

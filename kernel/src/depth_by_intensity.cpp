@@ -157,11 +157,11 @@ bool valid_inputs(const ImageView& frame, const Pose& pose, const FocusStack& st
 
 }  // namespace
 
-Status depth_by_intensity(const ImageView& frame, const Pose& pose, const FocusStack& stack,
-                          std::uint16_t& depth) noexcept {
-  if (!valid_inputs(frame, pose, stack)) return Status::kInvalidArgument;
-  bool have_best = false;
-  float best_score = 0.0f;
+Status depth_by_intensity(const ImageView& frame, const Pose& pose, const FocusStack& stack, std::uint16_t& depth,
+                          float switch_margin) noexcept {
+  if (!valid_inputs(frame, pose, stack) || !(switch_margin >= 0.0f && switch_margin <= 2.0f)) return Status::kInvalidArgument;
+  bool have_best = false, have_current = false;
+  float best_score = 0.0f, current_score = 0.0f;
   std::uint16_t best_depth = depth;
   for (std::size_t first = 0; first < stack.images.size(); first += kGroup) {
     const std::span<const ImageView> group =
@@ -170,14 +170,17 @@ Status depth_by_intensity(const ImageView& frame, const Pose& pose, const FocusS
     bool ok[kGroup];
     correlations(frame, group, pose, stack, scores, ok);
     for (std::size_t i = 0; i < group.size(); ++i) {
-      if (ok[i] && (!have_best || scores[i] > best_score)) {
+      if (!ok[i]) continue;
+      if (first + i == depth) have_current = true, current_score = scores[i];
+      if (!have_best || scores[i] > best_score) {
         have_best = true;
         best_score = scores[i];
         best_depth = static_cast<std::uint16_t>(first + i);
       }
     }
   }
-  if (have_best) depth = best_depth;
+  // Hysteresis: the current depth stays unless another correlates better by the margin.
+  if (have_best && (!have_current || best_score > current_score + switch_margin)) depth = best_depth;
   return Status::kOk;
 }
 

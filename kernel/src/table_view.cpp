@@ -118,8 +118,12 @@ Status TableView::open(std::span<const std::byte> bytes, TableView& out) noexcep
 
   // Header fields. Past the CRC only a deliberately crafted table reaches
   // here, but it must still be refused without any out-of-bounds read.
-  if (load_le<std::uint32_t>(b + off::kFlags) != 0 || load_le<std::uint16_t>(b + off::kReserved58) != 0 ||
-      !all_zero(b + off::kReserved140, table_format::kHeaderBytes - off::kReserved140)) {
+  // Flags: only the model-images section, and only from version 1.1.
+  const std::uint32_t flags = load_le<std::uint32_t>(b + off::kFlags);
+  const bool has_images = flags == table_format::kFlagModelImages;
+  if ((flags != 0 && !has_images) || (has_images && load_le<std::uint16_t>(b + off::kVersionMinor) < 1) || load_le<std::uint16_t>(b + off::kReserved58) != 0 ||
+      (!has_images && load_le<std::uint32_t>(b + off::kModelImagesOffset) != 0) ||
+      !all_zero(b + off::kReserved144, table_format::kHeaderBytes - off::kReserved144)) {
     return Status::kBadHeaderField;
   }
   const std::uint32_t cell_count = load_le<std::uint32_t>(b + off::kCellCount);
@@ -166,15 +170,26 @@ Status TableView::open(std::span<const std::byte> bytes, TableView& out) noexcep
     return Status::kBadHeaderField;
   }
 
+  // The model images: depth_count images of the model size.
+  std::uint32_t image_bytes = 0;
+  if (has_images) {
+    const std::uint64_t bytes64 = std::uint64_t{depth_count} * load_le<std::uint16_t>(b + off::kModelWidth) *
+                                  load_le<std::uint16_t>(b + off::kModelHeight);
+    if (bytes64 == 0) return Status::kBadHeaderField;
+    if (bytes64 > table_format::kMaxModelImageBytes) return Status::kCountTooLarge;
+    image_bytes = static_cast<std::uint32_t>(bytes64);
+  }
+
   // The layout is canonical (table_format::layout_of), so any other offset is an error.
   const std::uint32_t pixels = std::uint32_t{roi_width} * roi_height;
-  const table_format::Layout layout =
-      table_format::layout_of({cell_count, pixels, reference_count, reference_bytes, depth_count, model_point_count});
+  const table_format::Layout layout = table_format::layout_of(
+      {cell_count, pixels, reference_count, reference_bytes, depth_count, model_point_count, image_bytes});
   if (load_le<std::uint32_t>(b + off::kCellsOffset) != layout.cells ||
       load_le<std::uint32_t>(b + off::kPixelOffsetsOffset) != layout.pixel_offsets ||
       load_le<std::uint32_t>(b + off::kReferencesOffset) != layout.references ||
       load_le<std::uint32_t>(b + off::kModelCountsOffset) != layout.model_counts ||
-      load_le<std::uint32_t>(b + off::kModelPointsOffset) != layout.model_points) {
+      load_le<std::uint32_t>(b + off::kModelPointsOffset) != layout.model_points ||
+      (has_images && load_le<std::uint32_t>(b + off::kModelImagesOffset) != layout.model_images)) {
     return Status::kSectionOutOfBounds;
   }
   if (layout.file_bytes != file_bytes) return Status::kSizeMismatch;
@@ -241,6 +256,7 @@ Status TableView::open(std::span<const std::byte> bytes, TableView& out) noexcep
   view.references_ = refs;
   view.model_counts_ = b + counts_at;
   view.model_points_ = b + points_at;
+  view.model_images_ = has_images ? b + layout.model_images : nullptr;
   view.file_bytes_ = file_bytes;
   view.cell_count_ = cell_count;
   view.reference_count_ = reference_count;

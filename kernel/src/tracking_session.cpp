@@ -10,14 +10,16 @@ TrackState state_of(Confidence c) noexcept { return c == Confidence::kHigh ? Tra
 }  // namespace
 
 Status TrackingSession::start(const SessionOptions& options, const Pose& initial) noexcept {
-  if (!valid(options.filter) || !valid(options.recovery) || !pose_in_range(initial) || initial.depth >= fine_.depth_count()) {
+  if (!valid(options.filter) || !valid(options.recovery) || !pose_in_range(initial) || initial.depth >= fine_.depth_count() ||
+      !(options.theta_observability >= 0.0f && options.theta_observability <= 1.0f) ||
+      !(options.depth_switch_correlation >= 0.0f && options.depth_switch_correlation <= 2.0f)) {
     return Status::kInvalidArgument;
   }
   if (coarse_ != nullptr && coarse_->depth_count() != fine_.depth_count()) return Status::kInvalidArgument;
   options_ = options;
   pose_ = initial;
   last_confident_ = {initial, {}, 0};
-  filter_.reset(options.filter);
+  filter_.reset(options.filter, initial);
   search_.reset();
   lost_ = false;
   return Status::kOk;
@@ -33,52 +35,125 @@ Status TrackingSession::step(const ImageView& image, SessionScratch scratch, Ses
   ++last_confident_.frames_since;
   GABARIT_TRY(lost_ ? recover(image, scratch, out) : track_fine(image, scratch, out));
   if (stack_ != nullptr && out.state != TrackState::kLost) {
-    GABARIT_TRY(depth_by_intensity(image, pose_, *stack_, pose_.depth));
+    // Only what the table can tell apart: the depth where it has several,
+    // the angle where it rotates.
+    if (fine_.depth_count() > 1) {
+      GABARIT_TRY(depth_by_intensity(image, pose_, *stack_, pose_.depth, options_.depth_switch_correlation));
+    }
     out.pose = pose_;
     // The finer angle is reported, not fed back: the votes keep tracking from
     // their own estimate (fed back, it moved the next frames' ROI and cost
     // more than it gained on the microscope scene).
-    GABARIT_TRY(angle_by_intensity(image, pose_, *stack_, out.pose.theta_deg));
+    if (fine_.axis_theta().cells > 1) GABARIT_TRY(angle_by_intensity(image, pose_, *stack_, out.pose.theta_deg));
   }
   if (out.confidence == Confidence::kHigh) last_confident_ = {pose_, filter_.state(), 0};
   return Status::kOk;
 }
 
+// A best cell on the edge of the table's x or y range may be the foot of a
+// peak that lies outside the window (the prediction missed): not confident.
+bool TrackingSession::on_translation_border(std::uint32_t cell) const noexcept {
+  const Axis ax = fine_.axis_x(), ay = fine_.axis_y();
+  const std::uint32_t ix = cell % ax.cells, iy = (cell / ax.cells) % ay.cells;
+  return (ax.cells > 2 && (ix == 0 || ix + 1 == ax.cells)) || (ay.cells > 2 && (iy == 0 || iy + 1 == ay.cells));
+}
+
+bool TrackingSession::theta_observable(std::span<const VoteCounter> counters, std::uint32_t cell) const noexcept {
+  const Axis ax = fine_.axis_x(), ay = fine_.axis_y(), at = fine_.axis_theta();
+  if (at.cells < 2) return true;  // nothing to choose: the angle is the prior's
+  const std::uint32_t stride = ax.cells * ay.cells;
+  const std::uint32_t it = (cell / stride) % at.cells;
+  const auto score = [&](std::uint32_t c) { return normalised_score({c, counters[c], fine_.cell(c).stencil_size}); };
+  const float s0 = score(cell);
+  float neighbour = 0.0f;
+  if (it > 0) neighbour = score(cell - stride);
+  if (it + 1 < at.cells) {
+    const float s = score(cell + stride);
+    neighbour = s > neighbour ? s : neighbour;
+  }
+  return s0 - neighbour >= options_.theta_observability * s0;
+}
+
+Status TrackingSession::measure_at(const ImageView& image, const Pose& centre, SessionScratch scratch, Measurement& m) noexcept {
+  m = Measurement{};
+  GABARIT_TRY(track_step(fine_, detector_, image, centre, scratch.fine, m.step));
+  GatedChoice choice;
+  GABARIT_TRY(filter_.choose(fine_, scratch.fine.counters, centre, m.step.roi_centre_x, m.step.roi_centre_y, pose_.depth, choice));
+  if (!choice.found) return Status::kOk;
+  m.score = choice.score;
+  m.next_score = choice.next_score;
+  m.confidence = filter_.classify(choice.score, choice.next_score);
+  if ((choice.outranked || on_translation_border(choice.cell.cell)) && m.confidence == Confidence::kHigh)
+    m.confidence = Confidence::kIntermediate;
+  if (m.confidence == Confidence::kNone) return Status::kOk;
+  SubCellOffset o;
+  if (options_.refine) o = refine_within_cell(fine_, scratch.fine.counters, choice.cell.cell);
+  m.theta_observable = theta_observable(scratch.fine.counters, choice.cell.cell);
+  if (!m.theta_observable) o.theta_deg = 0.0f;
+  // Where the votes barely tell the angles apart (a near-symmetric outline)
+  // the angle is the cell's, as in the plain loop: no sub-cell offset.
+  m.pose = pose_of_cell(fine_, choice.cell.cell, centre, m.step.roi_centre_x, m.step.roi_centre_y, o.x, o.y, o.theta_deg);
+  return Status::kOk;
+}
+
+namespace {
+// The better of two measurements: higher confidence, then higher score.
+bool better(const TrackingSession::Measurement& a, const TrackingSession::Measurement& b) noexcept {
+  if (a.confidence != b.confidence) return static_cast<int>(a.confidence) < static_cast<int>(b.confidence);
+  return a.score > b.score;
+}
+}  // namespace
+
 Status TrackingSession::track_fine(const ImageView& image, SessionScratch scratch, SessionResult& out) noexcept {
   const Pose predicted = options_.motion_filter ? filter_.predict(pose_) : pose_;
-  GABARIT_TRY(track_step(fine_, detector_, image, predicted, scratch.fine, out.step));
-  const std::int32_t cx = out.step.roi_centre_x, cy = out.step.roi_centre_y;
-  const auto refined_pose = [&](std::uint32_t cell) {
-    SubCellOffset o;
-    if (options_.refine) o = refine_within_cell(fine_, scratch.fine.counters, cell);
-    return pose_of_cell(fine_, cell, predicted, cx, cy, o.x, o.y, o.theta_deg);
-  };
-
   if (!options_.motion_filter) {
     // The thesis's loop: the best cell, whatever its score.
+    GABARIT_TRY(track_step(fine_, detector_, image, predicted, scratch.fine, out.step));
     out.score = out.step.score;
     out.confidence = filter_.grade(out.step.score, normalised_score(out.step.runner_up));
     out.state = out.step.state;
-    if (out.step.state != TrackState::kLost) pose_ = refined_pose(out.step.best.cell);
+    if (out.step.state != TrackState::kLost) {
+      SubCellOffset o;
+      if (options_.refine) o = refine_within_cell(fine_, scratch.fine.counters, out.step.best.cell);
+      pose_ = pose_of_cell(fine_, out.step.best.cell, predicted, out.step.roi_centre_x, out.step.roi_centre_y, o.x, o.y, o.theta_deg);
+    }
     if (out.step.state == TrackState::kLost && options_.recover) begin_lost();
     out.pose = pose_;
     return Status::kOk;
   }
 
-  GatedChoice choice;
-  GABARIT_TRY(filter_.choose(fine_, scratch.fine.counters, predicted, cx, cy, pose_.depth, choice));
-  Confidence confidence = Confidence::kNone;
-  if (choice.found) {
-    out.score = choice.score;
-    confidence = filter_.grade(choice.score, choice.next_score);
-    if (choice.outranked && confidence == Confidence::kHigh) confidence = Confidence::kIntermediate;
+  Measurement m;
+  GABARIT_TRY(measure_at(image, predicted, scratch, m));
+  // The plain loop's choice this frame: the best cell of the vote at the
+  // last pose (here the prediction's vote when they coincide).
+  StepResult plain = m.step;
+  // Not confident at the prediction: the target may have turned back (or the
+  // velocity be wrong). Vote at the last pose too, as the plain loop would,
+  // and keep the better of the two, so a reversal is measured, not coasted.
+  const float dx = predicted.x - pose_.x, dy = predicted.y - pose_.y;
+  if (m.confidence != Confidence::kHigh && options_.vote_at_last_pose &&
+      (dx * dx + dy * dy >= 0.25f || predicted.theta_deg != pose_.theta_deg)) {
+    Measurement at_last;
+    GABARIT_TRY(measure_at(image, pose_, scratch, at_last));
+    plain = at_last.step;
+    if (better(at_last, m)) m = at_last;
   }
+  out.step = m.step;
+  out.score = m.score;
+  const Confidence confidence = m.confidence;
+  if (confidence != Confidence::kNone) static_cast<void>(filter_.grade(m.score, m.next_score));  // moves the reference score
   if (confidence != Confidence::kNone) {
-    const Pose measured = refined_pose(choice.cell.cell);
-    filter_.update(confidence, pose_, measured);
-    pose_ = measured;
+    // The angle is measured even where the votes barely constrain it (only
+    // its sub-cell offset is dropped): left out of the filter, its velocity
+    // went stale and the suite's tuning half tracked worse (docs/tracking.md).
+    filter_.update(confidence, m.pose);
+    pose_ = m.pose;
   } else {
-    pose_ = predicted;
+    // No measurement the filter trusts. Partly hidden, the target still
+    // wins the plain loop's vote, so follow that (never worse than the
+    // thesis's loop); the filter only predicts, and if it stays unsure the
+    // target is declared lost and searched for around the last confident pose.
+    pose_ = options_.follow_when_unsure && plain.state != TrackState::kLost ? plain.pose : predicted;
     filter_.coast();
   }
   out.confidence = confidence;
@@ -108,7 +183,7 @@ Status TrackingSession::recover(const ImageView& image, SessionScratch scratch, 
     if (options_.refine) o = refine_within_cell(fine_, scratch.fine.counters, out.step.best.cell);
     pose_ = pose_of_cell(fine_, out.step.best.cell, found.from, out.step.roi_centre_x, out.step.roi_centre_y, o.x, o.y,
                          o.theta_deg);
-    filter_.restart();
+    filter_.restart(pose_);
     lost_ = false;
     out.reacquired = true;
     out.state = TrackState::kUncertain;

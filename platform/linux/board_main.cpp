@@ -52,7 +52,8 @@ struct Config {
   int reopen_max_ms = 2000;            // back-off ceiling between reopen attempts
   bool frame_crc = false;
   bool quiet = false;
-  SessionOptions session = kPlainSession;
+  SessionOptions session;  // the robust session by default, as gabarit track
+  bool focus_stack = true;  // the table's model images, when it carries them
 };
 
 std::uint32_t parse_format(const std::string& text) {
@@ -77,9 +78,11 @@ Config parse(int argc, char** argv, bool& help_shown) {
        {"--size", "WxH", "frame size to request (default: the device's current size)"},
        {"--binary", "", "binary detector on frames whatever the table says"},
        {"--voter", "auto|csr|dense", "voting method; results are identical (default auto)"},
-       {"--motion-filter", "", "predict the ROI, gate candidates, grade confidence (as gabarit track)"},
-       {"--refine", "", "sub-cell x, y, theta (as gabarit track)"},
-       {"--recover", "", "once lost, search around the last confident pose (as gabarit track)"},
+       {"--plain", "", "the thesis's loop instead of the tracking session (as gabarit track --plain)"},
+       {"--motion-filter", "", "with --plain: the motion filter (default on, as gabarit track)"},
+       {"--refine", "", "with --plain: sub-cell x, y, theta (default on)"},
+       {"--recover", "", "with --plain: once lost, search around the last confident pose (default on)"},
+       {"--no-focus-stack", "", "ignore the table's model images (depth from the stencils only)"},
        {"--frames", "N", "stop after N tracked frames (default: run until signalled)"},
        {"--frame-timeout-ms", "MS", "report a stall after MS without a frame (default 2000)"},
        {"--reopen-min-ms", "MS", "wait after losing the device before reopening it; doubles per failed attempt (default 250)"},
@@ -126,9 +129,8 @@ Config parse(int argc, char** argv, bool& help_shown) {
   c.start_stopped = args.has("--start-stopped");
   if (c.start_stopped && c.gpio.trigger_line < 0) throw app::UsageError("--start-stopped needs --trigger-line");
   c.frame_crc = args.has("--frame-crc");
-  c.session.motion_filter = args.has("--motion-filter");
-  c.session.refine = args.has("--refine");
-  c.session.recover = args.has("--recover");
+  c.session = app::session_options(args.has("--plain"), args.has("--motion-filter"), args.has("--refine"), args.has("--recover"));
+  c.focus_stack = !args.has("--plain") && !args.has("--no-focus-stack");
   c.quiet = args.has("--quiet");
   return c;
 }
@@ -148,9 +150,11 @@ class Board {
         // As gabarit track: the recovery search detects features once per search.
         buffers_(table, nullptr, c.voter, c.session.recover),
         session_(table, nullptr, c.binary ? Detector{table_format::DetectorKind::kBinary, 0} : detector_of(table)),
+        stack_(table),
         running_(!c.start_stopped) {
     if (session_.start(c.session, app::parse_init_pose(c.init_text, table, "--init")) != Status::kOk)
       throw app::UsageError("--init: not a usable starting pose");
+    if (c.focus_stack) session_.use_focus_stack(stack_.get());
   }
 
   int run() {
@@ -315,6 +319,7 @@ class Board {
   int signal_fd_;
   app::SessionBuffers buffers_;
   TrackingSession session_;
+  app::TableFocusStack stack_;
   board::V4l2Capture capture_;
   board::GpioLines gpio_;
   board::UdpSender udp_;

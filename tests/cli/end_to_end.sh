@@ -48,9 +48,9 @@ for key in cells references bytes bytes_per_cell refs_per_pixel_histogram stenci
 done
 python3 -c 'import json,sys; json.load(open(sys.argv[1]))' "$work/inspect.json" 2>/dev/null || [ $? = 127 ] || fail "inspect output is not JSON"
 
-# Voting on several threads gives the same poses as one thread.
+# Voting on several threads (the plain loop) gives the same poses as one thread.
 init0=$(sed -n 2p "$d/gt.csv" | cut -d, -f2,3)
-$g track --table "$work/a.gbt" --frames "$d/frames.y4m" --init "$init0" --voter csr -o "$work/one.csv" 2>/dev/null || fail "track (1 thread)"
+$g track --table "$work/a.gbt" --frames "$d/frames.y4m" --init "$init0" --plain --voter csr -o "$work/one.csv" 2>/dev/null || fail "track (1 thread)"
 $g track --table "$work/a.gbt" --frames "$d/frames.y4m" --init "$init0" --threads 3 -o "$work/three.csv" 2>/dev/null || fail "track --threads 3"
 cmp -s "$work/one.csv" "$work/three.csv" || fail "--threads 3 changed the poses"
 expect 2 "plain loop" $g track --table "$work/a.gbt" --frames "$d/frames.y4m" --init "$init0" --threads 2 --motion-filter
@@ -104,9 +104,23 @@ $g track --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init" --motion-fil
   --focus-stack "$s/model_00.pgm,$s/model_01.pgm" -o "$s/pf.csv" 2>/dev/null || fail "track --focus-stack"
 $g eval --gt "$s/gt.csv" --poses "$s/pf.csv" > "$s/accf.json" || fail "eval with --focus-stack"
 grep -q '"depth_exact": 34' "$s/accf.json" || fail "--focus-stack: every visible depth expected exact: $(cat "$s/accf.json")"
+# By default the session uses the focus stack the table carries: the same
+# poses as naming its images; --no-focus-stack and --no-model-images go without.
+grep -q '"images_stored": true' "$s/t.json" || fail "a table built from images should carry them: $(cat "$s/t.json")"
+$g track --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init" -o "$s/pd.csv" 2>/dev/null || fail "track (defaults)"
+cmp -s "$s/pf.csv" "$s/pd.csv" || fail "the default session with the table's images differs from --focus-stack with the same images"
+$g track --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init" --no-focus-stack -o "$s/pn.csv" 2>/dev/null || fail "--no-focus-stack"
+cmp -s "$s/p.csv" "$s/pd.csv" || fail "--motion-filter --refine --recover are the defaults and should change nothing"
+$g tables build --model "$s/model_00.pgm" --model "$s/model_01.pgm" --x -4:4:9 --y -4:4:9 --theta -1.5:1.5:7 --no-model-images \
+  -o "$s/t10.gbt" 2>/dev/null || fail "tables build --no-model-images"
+$g tables inspect "$s/t10.gbt" > "$s/t10.json" && grep -q '"images_stored": false' "$s/t10.json" || fail "--no-model-images stored images"
+[ "$(stat -c %s "$s/t10.gbt")" -lt "$(stat -c %s "$s/t.gbt")" ] || fail "--no-model-images: not smaller"
+$g track --table "$s/t10.gbt" --frames "$s/frames.y4m" --init "$init" -o "$s/p10.csv" 2>/dev/null || fail "track a 1.0 table"
+cmp -s "$s/pn.csv" "$s/p10.csv" || fail "a table without images should track as --no-focus-stack"
+$g track --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init" --plain -o "$s/pp.csv" 2>/dev/null || fail "track --plain"
 expect 1 "the focus stack has 1 images; the table has 2 depths" $g track --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init" \
   --motion-filter --focus-stack "$s/model_00.pgm"
-expect 2 "drop --threads" $g track --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init" --threads 2 \
+expect 2 "applies to the plain loop" $g track --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init" --threads 2 \
   --focus-stack "$s/model_00.pgm,$s/model_01.pgm"
 # The cheaper recovery (a search every 2nd lost frame, every 3rd feature screening) still reacquires.
 $g track --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init" --motion-filter --refine --recover \
@@ -117,7 +131,7 @@ expect 2 "--search-interval" $g track --table "$s/t.gbt" --frames "$s/frames.y4m
 expect 2 "--screen-stride" $g track --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init" --recover --screen-stride 17
 expect 2 "--search-budget" $g track --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init" --recover --search-budget 559
 expect 2 "applies to --scene" $g synth --shape curve --depths 3 -o "$work/x"
-expect 2 "one of --shape and --scene" $g synth -o "$work/x"
+expect 2 "one of --shape, --scene and --suite" $g synth -o "$work/x"
 expect 2 "--translations" $g tables build --model "$s/model_00.pgm" --x 0:0:1 --y 0:0:1 --translations middle -o "$work/x.gbt"
 
 # Hardening: outputs never clobber inputs or a previous output, inputs are
@@ -142,13 +156,13 @@ expect 1 "kept none" $g tables build --model-points "$d/model.csv" --binary --x 
 cmp -s "$work/a.gbt" "$work/prev.gbt" || fail "a failed tables build clobbered the previous table"
 [ -z "$(find "$work" -maxdepth 1 -name '.*.tmp.*')" ] || fail "temporary files left behind: $(ls -a "$work")"
 # Frames from a pipe, standard input and a FIFO: the same poses as the file.
-$g track --table "$work/a.gbt" --frames - --init "$init0" --voter csr -o "$work/stdin.csv" < "$d/frames.y4m" 2>/dev/null || fail "track --frames -"
+$g track --table "$work/a.gbt" --frames - --init "$init0" --plain --voter csr -o "$work/stdin.csv" < "$d/frames.y4m" 2>/dev/null || fail "track --frames -"
 cmp -s "$work/one.csv" "$work/stdin.csv" || fail "--frames - gave other poses"
-cat "$d/frames.y4m" | $g track --table "$work/a.gbt" --frames - --init "$init0" --voter csr > "$work/piped.csv" 2>/dev/null || fail "track from a pipe"
+cat "$d/frames.y4m" | $g track --table "$work/a.gbt" --frames - --init "$init0" --plain --voter csr > "$work/piped.csv" 2>/dev/null || fail "track from a pipe"
 cmp -s "$work/one.csv" "$work/piped.csv" || fail "a pipe gave other poses"
 mkfifo "$work/fifo"
 cat "$d/frames.y4m" > "$work/fifo" &
-$g track --table "$work/a.gbt" --frames "$work/fifo" --init "$init0" --voter csr -o "$work/fifo.csv" 2>/dev/null || fail "track from a FIFO"
+$g track --table "$work/a.gbt" --frames "$work/fifo" --init "$init0" --plain --voter csr -o "$work/fifo.csv" 2>/dev/null || fail "track from a FIFO"
 wait
 cmp -s "$work/one.csv" "$work/fifo.csv" || fail "a FIFO gave other poses"
 # Headers are checked before anything is allocated, and against the file.

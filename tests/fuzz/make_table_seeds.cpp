@@ -26,12 +26,20 @@ namespace tf = table_format;
 namespace off = tf::offset;
 
 std::vector<std::byte> build(const std::vector<host::Point>& points, int depths, const char* x, const char* theta,
-                             table_format::DetectorKind kind, std::uint16_t threshold, double keep) {
+                             table_format::DetectorKind kind, std::uint16_t threshold, double keep, bool images = false) {
   host::ModelStack model;
   for (int d = 0; d < depths; ++d) {
     std::vector<host::Point> scaled;
     for (const host::Point& p : points) scaled.push_back({p.x + d * (p.x > 0 ? 1 : -1), p.y});
     model.depths.push_back(scaled);
+    if (images) {  // format 1.1: a focus stack of small images, the points drawn in
+      model.image_width = model.image_height = 33;
+      model.ref_x = model.ref_y = 16;
+      std::vector<std::uint8_t> image(33 * 33, static_cast<std::uint8_t>(60 + 20 * d));
+      for (const host::Point& p : scaled)
+        if (p.x >= -16 && p.x <= 16 && p.y >= -16 && p.y <= 16) image[static_cast<std::size_t>((p.y + 16) * 33 + p.x + 16)] = 220;
+      model.images.push_back(image);
+    }
   }
   model.detector.kind = kind;
   model.detector.threshold = threshold;
@@ -69,6 +77,7 @@ int main(int argc, char** argv) {
       {"binary", build(curve, 1, "-2:2:5", "0:0:1", binary, 0, 1.0)},
       {"rotation", build(curve, 1, "-1:1:3", "-2:2:3", gradient, 20, 1.0)},
       {"depths", build(curve, 3, "-1:1:3", "0:0:1", canny, 30, 1.0)},
+      {"model-images", build(curve, 2, "-1:1:3", "-1:1:3", canny, 30, 1.0, true)},
       {"decimated", build(curve, 1, "-3:3:7", "0:0:1", binary, 0, 0.3)},
       {"two-byte-refs", build(curve, 1, "-8:8:17", "0:0:1", binary, 0, 1.0)},
       {"four-byte-refs", build({{0, 0}}, 1, "-128:128:257", "0:0:1", binary, 0, 1.0)},  // 66,049 cells

@@ -79,6 +79,18 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     static_cast<void>(searching.step(empty, {scratch, {}, {}}, result));  // lost
     static_cast<void>(searching.step(frame, {scratch, {}, {}}, result));  // searches
   }
+  // A table with model images: the default session with its own focus stack
+  // (every stored image read through TableView::model_image).
+  if (table.has_model_images()) {
+    std::vector<ImageView> stored;
+    for (std::uint16_t d = 0; d < table.depth_count() && d < 16; ++d) stored.push_back(table.model_image(d));
+    const FocusStack own{stored, table.model_ref_x(), table.model_ref_y(), 2};
+    TrackingSession with_stack(table, nullptr, detector_of(table));
+    if (stored.size() == table.depth_count() && with_stack.start(filtered, start) == Status::kOk) {
+      with_stack.use_focus_stack(&own);
+      for (int f = 0; f < 2; ++f) static_cast<void>(with_stack.step(frame, {scratch, {}, {}}, result));
+    }
+  }
   // The intensity steps with the frame as every depth's image.
   if (table.depth_count() <= 16) {
     std::vector<ImageView> stack(table.depth_count(), frame);

@@ -126,6 +126,52 @@ TEST(TableView, RejectsOtherVersionsButAcceptsANewerMinor) {
   EXPECT_EQ(open_copy(bytes), Status::kOk);
 }
 
+// Format 1.1: a table built from images carries them, one per depth, after
+// the model points; a crafted size or offset is refused.
+TEST(TableView, CarriesTheModelImagesOfATableBuiltFromImages) {
+  host::Rng rng(5);
+  host::ModelStack model = point_model(testing::random_points(rng, 12, 6));
+  model.depths.push_back(model.depths[0]);
+  model.image_width = 7;
+  model.image_height = 5;
+  for (int d = 0; d < 2; ++d) {
+    std::vector<std::uint8_t> image(35);
+    for (std::size_t i = 0; i < image.size(); ++i) image[i] = static_cast<std::uint8_t>(10 * d + i);
+    model.images.push_back(image);
+  }
+  host::BuildOptions o;
+  o.space.x = host::parse_axis("-2:2:5", "x");
+  o.space.y = host::parse_axis("-1:1:3", "y");
+  const std::vector<std::byte> bytes = host::build_table(model, o);
+  const TableView t = testing::open_table(bytes);
+  ASSERT_TRUE(t.has_model_images());
+  EXPECT_EQ(load_le<std::uint16_t>(bytes.data() + off::kVersionMinor), 1);
+  const ImageView second = t.model_image(1);
+  EXPECT_EQ(second.width, 7u);
+  EXPECT_EQ(second.height, 5u);
+  EXPECT_EQ(second.at(3, 2), 10 + 2 * 7 + 3);
+  EXPECT_EQ(bytes.size() % 8, 0u);
+  const auto edited = [&](std::size_t at, std::uint32_t value, int width) {
+    auto bad = bytes;
+    if (width == 2) store_le<std::uint16_t>(bad.data() + at, static_cast<std::uint16_t>(value));
+    if (width == 4) store_le<std::uint32_t>(bad.data() + at, value);
+    reseal(bad);
+    return open_copy(bad);
+  };
+  EXPECT_EQ(edited(off::kModelImagesOffset, load_le<std::uint32_t>(bytes.data() + off::kModelImagesOffset) + 8, 4),
+            Status::kSectionOutOfBounds);
+  EXPECT_EQ(edited(off::kModelWidth, 8, 2), Status::kSizeMismatch);  // the images no longer fill the file
+  EXPECT_EQ(edited(off::kModelWidth, 0, 2), Status::kBadHeaderField);
+  EXPECT_EQ(edited(off::kModelWidth, 0xFFFFFFFFu /* 65535 x 65535 */, 4), Status::kCountTooLarge);
+  EXPECT_EQ(edited(off::kVersionMinor, 0, 2), Status::kBadHeaderField);
+  // Without them (--no-model-images) the table is format 1.0, as before.
+  o.store_model_images = false;
+  const std::vector<std::byte> plain = host::build_table(model, o);
+  EXPECT_FALSE(testing::open_table(plain).has_model_images());
+  EXPECT_EQ(load_le<std::uint16_t>(plain.data() + off::kVersionMinor), 0);
+  EXPECT_EQ(plain.size() + 2 * 35 + 2, bytes.size());  // 70 bytes of images, aligned to 8
+}
+
 struct Edit {
   const char* what;
   std::size_t at;
@@ -145,14 +191,16 @@ TEST(TableView, RejectsCraftedHeadersWithAValidChecksum) {
       {"cell count disagreeing with the space", off::kCellCount, t.cell_count() + 1, 4, Status::kSizeMismatch},
       {"reference count beyond the file", off::kReferenceCount, t.reference_count() + 100000, 4, Status::kSectionOutOfBounds},
       {"zero cells", off::kCellCount, 0, 4, Status::kBadHeaderField},
-      {"flags set", off::kFlags, 1, 4, Status::kBadHeaderField},
+      {"the model-images flag in a 1.0 table", off::kFlags, 1, 4, Status::kBadHeaderField},
       {"reference width not the narrowest", off::kReferenceBytes, 2, 1, Status::kBadHeaderField},
       {"unknown detector", off::kDetectorKind, 9, 1, Status::kBadHeaderField},
       {"zero x cells", off::kAxisX + 8, 0, 4, Status::kBadHeaderField},
       {"keep ratio above 1", off::kKeepRatio, 0x40000000u /* 2.0f */, 4, Status::kBadHeaderField},
       {"section moved", off::kReferencesOffset, 8, 4, Status::kSectionOutOfBounds},
       {"max stencil size wrong", off::kMaxStencilSize, 3, 4, Status::kStencilSizeMismatch},
-      {"reserved byte set", off::kReserved140 + 5, 1, 1, Status::kBadHeaderField},
+      {"reserved byte set", off::kReserved144 + 5, 1, 1, Status::kBadHeaderField},
+      {"an unknown flag", off::kFlags, 2, 4, Status::kBadHeaderField},
+      {"a model-images offset without the flag", off::kModelImagesOffset, 8, 4, Status::kBadHeaderField},
   };
   for (const Edit& e : edits) {
     auto bad = good;

@@ -89,5 +89,63 @@ TEST(Evaluation, AngleDepthAndReacquisitionAreMeasured) {
   EXPECT_EQ(never.reacquired_after[0], -1);
 }
 
+// The scene suite: both halves hold every object twice, and each block of 8
+// scenes gives an object another motion; every object renders, with its
+// outline inside the model image, and a sliding occluder hides the object
+// for a middle stretch of frames, not from the first covered frame.
+TEST(SceneSuite, MixesObjectsMotionsAndHalvesAndEveryObjectRenders) {
+  int per_half[2][8] = {};
+  for (std::uint32_t i = 0; i < kSuiteScenes; ++i) {
+    const SceneOptions o = suite_scene(i);
+    ++per_half[suite_held_out(i) ? 1 : 0][static_cast<int>(o.object)];
+    if (i >= 8) {
+      EXPECT_NE(static_cast<int>(suite_scene(i - 8).motion), static_cast<int>(o.motion)) << i;
+    }
+    EXPECT_EQ(o.seed, i + 1u);
+  }
+  for (const auto& half : per_half)
+    for (int n : half) EXPECT_EQ(n, 2);
+
+  const auto dir = std::filesystem::temp_directory_path() / ("gabarit-suite-test-" + std::to_string(::getpid()));
+  for (const SceneObject object : {SceneObject::kCog, SceneObject::kCoin, SceneObject::kHorse, SceneObject::kPipette, SceneObject::kCat,
+                                   SceneObject::kAstronaut, SceneObject::kCup, SceneObject::kLarge}) {
+    SceneOptions o;
+    o.object = object;
+    o.width = o.height = 0;
+    o.frames = 30;
+    o.motion = SceneMotion::kWalk;
+    o.occlusion_side = OcclusionSide::kLeft;
+    o.occlusion_start = 5;
+    o.occlusion_frames = 4;  // 8 frames sliding in, 4 covered, 8 out
+    const std::string name = name_of(object);
+    SceneObject parsed{};
+    ASSERT_TRUE(parse_scene_name(name, parsed));
+    EXPECT_EQ(parsed, object);
+    const SceneSummary summary = write_scene_sequence(o, (dir / name).string());
+    const app::GrayImage model = app::read_pgm((dir / name / "model_00.pgm").string());
+    std::size_t object_pixels = 0, border_changed = 0;
+    for (std::uint32_t y = 0; y < model.height; ++y)
+      for (std::uint32_t x = 0; x < model.width; ++x) {
+        const bool edge = x < 4 || y < 4 || x + 4 >= model.width || y + 4 >= model.height;
+        const bool changed = model.pixels[y * model.width + x] != 128;
+        object_pixels += changed;
+        border_changed += changed && edge;
+      }
+    EXPECT_GT(object_pixels, 400u) << name;
+    EXPECT_EQ(border_changed, 0u) << name << ": the outline must stay inside the model image";
+    const auto truth = read_pose_csv((dir / name / "gt.csv").string());
+    ASSERT_EQ(truth.size(), 30u);
+    EXPECT_TRUE(truth[5].visible) << name << ": the occluder only starts sliding in";
+    EXPECT_FALSE(truth[14].visible) << name << ": covered";
+    EXPECT_TRUE(truth[29].visible) << name << ": the occluder has left";
+    EXPECT_LT(summary.visible_frames, 30u);
+    for (const PoseSample& p : truth) {
+      EXPECT_GT(p.x, summary.object_radius) << name;
+      EXPECT_LT(p.x, summary.width - summary.object_radius) << name;
+    }
+  }
+  std::filesystem::remove_all(dir);
+}
+
 }  // namespace
 }  // namespace gabarit::host

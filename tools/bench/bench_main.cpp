@@ -26,6 +26,7 @@
 
 #include "experiments.hpp"
 #include "microscope.hpp"
+#include "suite.hpp"
 #include "gabarit/app/error.hpp"
 #include "gabarit/host/thesis_shapes.hpp"
 #include "svg_plot.hpp"
@@ -79,6 +80,9 @@ struct Options {
   unsigned threads = std::max(1u, std::thread::hardware_concurrency());
   std::string regression_csv;
   bool microscope = false;
+  bool suite = false;
+  std::uint32_t scenes = 0;
+  bool no_peer = false;
 };
 
 struct TimingRow {
@@ -361,6 +365,7 @@ int run(const Options& o) {
 constexpr const char* kHelp =
     "usage: gabarit bench [--quick] [--out DIR] [--threads N] [--frames N] [--timing-frames N]\n"
     "       gabarit bench --microscope [--quick] [--out DIR]\n"
+    "       gabarit bench --suite [--quick] [--out DIR] [--scenes N] [--frames N] [--no-peer]\n"
     "       gabarit bench --regression-csv FILE\n\n"
     "Re-measures the thesis's synthetic experiments (section 6.2) in one run: Table 6.1 timings against\n"
     "OpenCV's matchTemplate, the wrong-frame grid over noise x references kept (Figs. 6.16-6.19), the\n"
@@ -374,6 +379,10 @@ constexpr const char* kHelp =
     "  --timing-frames N     frames per timed method (default 300, quick 40)\n"
     "  --microscope          the 4-DOF microscope experiment instead (section 6.1): grayscale scene, motion\n"
     "                        filter, refinement, recovery, OpenCV NCC bank, 2-thread voting, 4-DOF build time\n"
+    "  --suite               the scene suite instead (docs/scene-suite.md): the default session, the plain\n"
+    "                        loop and the OpenCV NCC bank per scene, median and worst scene per half\n"
+    "                        (tuning / held out), mean and p99 us/frame; --scenes (default 32, quick 8),\n"
+    "                        --frames per scene (default 160, quick 60), --no-peer skips the NCC bank\n"
     "  --regression-csv F    write the regression test's small grid to F and exit\n"
     "  --help                show this help\n";
 
@@ -412,6 +421,12 @@ int main(int argc, char** argv) {
         o.timing_frames = count(1, 100000);
       } else if (a == "--microscope") {
         o.microscope = true;
+      } else if (a == "--suite") {
+        o.suite = true;
+      } else if (a == "--scenes") {
+        o.scenes = static_cast<std::uint32_t>(count(1, 1000));
+      } else if (a == "--no-peer") {
+        o.no_peer = true;
       } else if (a == "--regression-csv") {
         o.regression_csv = value();
       } else {
@@ -419,7 +434,18 @@ int main(int argc, char** argv) {
         return 2;
       }
     }
+    if (o.microscope && o.suite) throw gabarit::app::Error("give one of --microscope and --suite");
+    if ((o.scenes || o.no_peer) && !o.suite) throw gabarit::app::Error("--scenes and --no-peer apply to --suite");
     if (o.microscope) return run_microscope(o.out, o.quick);
+    if (o.suite) {
+      SuiteOptions s;
+      s.out = o.out;
+      s.quick = o.quick;
+      s.scenes = o.scenes;
+      s.frames = static_cast<std::uint32_t>(o.grid_frames);
+      s.peer = !o.no_peer;
+      return run_suite(s);
+    }
     return run(o);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "gabarit bench: error: %s\n", e.what());

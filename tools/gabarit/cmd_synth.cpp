@@ -1,5 +1,6 @@
 // gabarit synth
 #include <cstdio>
+#include <filesystem>
 
 #include "gabarit/app/args.hpp"
 #include "gabarit/app/files.hpp"
@@ -11,11 +12,29 @@
 namespace gabarit::cli {
 namespace {
 
+template <typename E>
+E scene_choice(const app::Args& args, const char* option, E fallback, const char* choices) {
+  if (!args.has(option)) return fallback;
+  E out = fallback;
+  if (!host::parse_scene_name(args.get(option), out))
+    throw app::UsageError(std::string(option) + " '" + args.get(option) + "': want " + choices);
+  return out;
+}
+
+constexpr const char* kObjects = "microscope, cog, coin, horse, pipette, cat, astronaut, cup or large";
+
 int synth_scene(const app::Args& args) {
-  if (args.get("--scene") != "microscope") throw app::UsageError("--scene '" + args.get("--scene") + "': want microscope");
   for (const char* shape_only : {"--points", "--max-step", "--noise"})
     if (args.has(shape_only)) throw app::UsageError(std::string(shape_only) + " applies to --shape");
   host::SceneOptions o;
+  const std::string object = args.get("--scene");
+  if (object != "microscope" && !host::parse_scene_name(object, o.object))
+    throw app::UsageError("--scene '" + object + "': want " + std::string(kObjects));
+  if (object != "microscope" && object != "cog") o.width = o.height = 0;  // the object's own size
+  o.background = scene_choice(args, "--background", o.background, "gravel, grass, brick, moon, page or smooth");
+  o.motion = scene_choice(args, "--motion", o.motion, "smooth, walk, stopgo, spin or sweep");
+  o.occlusion_side = scene_choice(args, "--occlusion-side", o.occlusion_side, "none, cover, left, right, top or bottom");
+  o.stack = scene_choice(args, "--stack", o.stack, "tilted or alike");
   o.seed = static_cast<std::uint64_t>(args.integer("--seed", 1, 0, INT64_MAX));
   o.frames = static_cast<std::uint32_t>(args.integer("--frames", o.frames, 1, 100000));
   o.depths = static_cast<std::uint16_t>(args.integer("--depths", 1, 1, 32));
@@ -33,16 +52,42 @@ int synth_scene(const app::Args& args) {
     o.height = size.height;
   }
   const auto summary = host::write_scene_sequence(o, args.get("-o"));
-  std::fprintf(stderr, "%s: %u frames %ux%u (%u visible), object radius %u px, %u depths, seed %llu\n", args.get("-o").c_str(),
-               o.frames, o.width, o.height, summary.visible_frames, summary.object_radius, o.depths,
-               static_cast<unsigned long long>(o.seed));
+  std::fprintf(stderr, "%s: %s, %u frames %ux%u (%u visible), object radius %u px, %u depths, seed %llu\n", args.get("-o").c_str(),
+               host::scene_name(o).c_str(), o.frames, summary.width, summary.height, summary.visible_frames, summary.object_radius,
+               o.depths, static_cast<unsigned long long>(o.seed));
+  return 0;
+}
+
+// The scene suite: DIR/NN/ per scene and DIR/suite.csv listing them.
+int synth_suite(const app::Args& args) {
+  for (const char* other : {"--points", "--max-step", "--noise", "--depths", "--occlusion", "--size", "--seed", "--background",
+                            "--motion", "--occlusion-side", "--stack"})
+    if (args.has(other)) throw app::UsageError(std::string(other) + " does not apply to --suite (its scenes are fixed)");
+  const auto count = static_cast<std::uint32_t>(args.integer("--scenes", host::kSuiteScenes, 1, 1000));
+  const auto frames = static_cast<std::uint32_t>(args.integer("--frames", 160, 1, 100000));
+  const std::filesystem::path dir(args.get("-o"));
+  std::string listing = "index,name,half,object,background,motion,occlusion_side,depths,stack,seed,frames,visible,width,height\n";
+  for (std::uint32_t i = 0; i < count; ++i) {
+    const host::SceneOptions o = host::suite_scene(i, frames);
+    char sub[16];
+    std::snprintf(sub, sizeof sub, "%02u", i);
+    const host::SceneSummary s = host::write_scene_sequence(o, (dir / sub).string());
+    listing += std::to_string(i) + "," + host::scene_name(o) + "," + (host::suite_held_out(i) ? "held-out" : "tuning") + "," +
+               host::name_of(o.object) + "," + host::name_of(o.background) + "," + host::name_of(o.motion) + "," +
+               host::name_of(o.occlusion_side) + "," + std::to_string(o.depths) + "," + host::name_of(o.stack) + "," +
+               std::to_string(o.seed) + "," + std::to_string(o.frames) + "," + std::to_string(s.visible_frames) + "," +
+               std::to_string(s.width) + "," + std::to_string(s.height) + "\n";
+    std::fprintf(stderr, "\r%s: scene %u/%u %-40s", dir.c_str(), i + 1, count, host::scene_name(o).c_str());
+  }
+  app::write_file((dir / "suite.csv").string(), listing);
+  std::fprintf(stderr, "\n%s: %u scenes, listed in suite.csv\n", dir.c_str(), count);
   return 0;
 }
 
 }  // namespace
 
 int synth(const std::vector<std::string>& argv) {
-  app::Args args("synth", "(--shape SRC --frames N --max-step PX --noise P | --scene microscope [--depths N]) --seed S -o DIR",
+  app::Args args("synth", "(--shape SRC --frames N --max-step PX --noise P | --scene OBJECT [--depths N] | --suite) --seed S -o DIR",
             "--shape: a synthetic sequence of the thesis (section 6.2): a point shape translated over an empty\n"
             "image by a random displacement within +-PX per axis and frame, with salt-and-pepper noise of rate P.\n"
             "Outputs DIR/frames.y4m (Cmono), DIR/gt.csv (frame,x,y,theta_deg,depth,visible), DIR/model.csv\n"
@@ -50,23 +95,36 @@ int synth(const std::vector<std::string>& argv) {
             "--scene microscope: a grayscale 4-DOF sequence from real photographs (python3-skimage): an object\n"
             "moving smoothly in x, y, theta (and through a focus stack with --depths) over a cluttered\n"
             "background, with an illumination change, sensor noise, motion-blurred frames and an occlusion.\n"
-            "Outputs DIR/frames.y4m, DIR/gt.csv and the model stack DIR/model_NN.pgm. Deterministic per seed.",
+            "Outputs DIR/frames.y4m, DIR/gt.csv and the model stack DIR/model_NN.pgm. Deterministic per seed.\n"
+            "--scene OBJECT: the same with another object, background, motion and occlusion (docs/scene-suite.md).\n"
+            "--suite: the scene suite, DIR/00 .. DIR/31 (half for tuning, half held out) and DIR/suite.csv.",
             {{"--shape", "SRC", "random | curve (thesis ~194 points) | watch (~2800 edge points of a Debian\n"
               "                          photograph) | photo:FILE.pgm | points CSV (x,y relative to the reference)"},
-             {"--scene", "microscope", "the grayscale 4-DOF scene instead of a point shape"},
+             {"--scene", "OBJECT", "the grayscale 4-DOF scene instead of a point shape: microscope (the cog over\n"
+              "                          gravel), cog, coin, horse, pipette, cat, astronaut, cup, large"},
+             {"--background", "NAME", "--scene: gravel (default), grass, brick, moon, page, smooth"},
+             {"--motion", "NAME", "--scene: smooth (default), walk (velocity random walk, reversing at the margins),\n"
+              "                          stopgo, spin (~1.2 deg/frame), sweep (depth steps every 6 frames)"},
+             {"--occlusion-side", "SIDE", "--scene: cover (default: all at once), left, right, top, bottom (sliding in), none"},
+             {"--stack", "KIND", "--scene: tilted (default: no two depths alike) or alike (two middle depths nearly equal)"},
+             {"--suite", "", "the scene suite (fixed scenes; --frames and --scenes apply)"},
+             {"--scenes", "N", "--suite: the first N scenes (default 32)"},
              {"--depths", "N", "--scene: focus-stack depths of the tilted object, 1..32 (default 1)"},
              {"--occlusion", "START:FRAMES", "--scene: frames hidden behind another photograph (default 100:18; 0:0 none)"},
              {"--points", "N", "approximate point count for random (default 194) and photo: (default 2800)"},
-             {"--frames", "N", "frame count (default 100; --scene: 240)"},
+             {"--frames", "N", "frame count (default 100; --scene: 240; --suite: 160)"},
              {"--max-step", "PX", "largest displacement per axis and frame (default 4)"},
              {"--noise", "P", "salt-and-pepper rate in [0,1] (default 0)"},
              {"--seed", "S", "seed (default 1)"},
              {"--size", "WxH", "image size (default: 256x256, larger if the shape needs it)"},
              {"-o", "DIR", "output directory", false, true}});
   if (!args.parse(argv)) return 0;
-  if (args.has("--scene") == args.has("--shape")) throw app::UsageError("give one of --shape and --scene");
+  if (int{args.has("--scene")} + int{args.has("--shape")} + int{args.has("--suite")} != 1)
+    throw app::UsageError("give one of --shape, --scene and --suite");
+  if (args.has("--scenes") && !args.has("--suite")) throw app::UsageError("--scenes applies to --suite");
+  if (args.has("--suite")) return synth_suite(args);
   if (args.has("--scene")) return synth_scene(args);
-  for (const char* scene_only : {"--depths", "--occlusion"})
+  for (const char* scene_only : {"--depths", "--occlusion", "--background", "--motion", "--occlusion-side", "--stack"})
     if (args.has(scene_only)) throw app::UsageError(std::string(scene_only) + " applies to --scene");
   host::SynthOptions o;
   o.seed = static_cast<std::uint64_t>(args.integer("--seed", 1, 0, INT64_MAX));

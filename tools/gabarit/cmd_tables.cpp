@@ -49,8 +49,11 @@ int tables_build(const std::vector<std::string>& argv) {
               "                          it, else the closest (default), or the smallest enclosing range (docs/tracking.md)"},
              {"--seed", "N", "decimation seed (default 1)"},
              {"--binary", "", "binary detector: a non-zero pixel is a feature (model images and frames)"},
-             {"--detector", "gradient-rows|canny", "edge detector for grey images (default gradient-rows, the thesis's fast\n"
-              "                          one; canny: non-maximum suppression and a double threshold, threshold/2..threshold)"},
+             {"--detector", "canny|gradient-rows", "edge detector for grey images (default canny: non-maximum suppression\n"
+              "                          and a double threshold, threshold/2..threshold; gradient-rows: the thesis's fast one,\n"
+              "                          which keeps one pixel per run along a row and so misses edges near horizontal)"},
+             {"--no-model-images", "", "leave the model images out of the table (format 1.0; the tracker then has no\n"
+              "                          focus stack of its own: depth from the stencils, or gabarit track --focus-stack)"},
              {"--threshold", "N", "gradient detector threshold 1..2040 (default: a quarter of the model's strongest edge)"},
              {"-o", "OUT", "output table file", false, true}},
             "IMG.pgm");
@@ -73,7 +76,7 @@ int tables_build(const std::vector<std::string>& argv) {
   if (has_images) {
     host::ImageModelOptions mo;
     mo.binary = args.has("--binary");
-    const std::string detector = args.get_or("--detector", "gradient-rows");
+    const std::string detector = args.get_or("--detector", "canny");
     if (detector != "gradient-rows" && detector != "canny") throw app::UsageError("--detector '" + detector + "': want gradient-rows or canny");
     if (mo.binary && args.has("--detector")) throw app::UsageError("--detector has no meaning with --binary");
     mo.canny = detector == "canny";
@@ -96,7 +99,7 @@ int tables_build(const std::vector<std::string>& argv) {
       model.detector.kind = table_format::DetectorKind::kBinary;
       if (args.has("--threshold")) throw app::UsageError("--threshold has no meaning with --binary");
     } else if (args.has("--threshold")) {
-      model.detector.kind = args.get_or("--detector", "gradient-rows") == "canny" ? table_format::DetectorKind::kCanny
+      model.detector.kind = args.get_or("--detector", "canny") == "canny" ? table_format::DetectorKind::kCanny
                                                                                : table_format::DetectorKind::kGradientRows;
       model.detector.threshold = static_cast<std::uint16_t>(args.integer("--threshold", 1, 1, kMaxGradientMagnitude));
     } else {
@@ -105,6 +108,8 @@ int tables_build(const std::vector<std::string>& argv) {
   }
 
   host::BuildOptions bo;
+  bo.store_model_images = !args.has("--no-model-images");
+  if (!has_images && args.has("--no-model-images")) throw app::UsageError("--no-model-images applies to --model images");
   bo.space.x = axis_argument(args, "--x", "");
   bo.space.y = axis_argument(args, "--y", "");
   bo.space.theta = axis_argument(args, "--theta", "0:0:1");

@@ -9,23 +9,30 @@
 #include "gabarit/app/error.hpp"
 #include "gabarit/app/image_io.hpp"
 #include "gabarit/app/files.hpp"
+#include "gabarit/app/scratch.hpp"
 #include "gabarit/host/tracking_run.hpp"
 
 namespace gabarit::cli {
 
 int track(const std::vector<std::string>& argv) {
-  app::Args args("track", "--table T --frames SEQ --init X,Y[,THETA[,DEPTH]] [--binary] [-o POSES.csv] [--stats STATS.json]",
+  app::Args args("track", "--table T --frames SEQ --init X,Y[,THETA[,DEPTH]] [--plain] [-o POSES.csv] [--stats STATS.json]",
             "Tracks the table's model through a sequence (a Y4M file, Cmono or 4:2:0, luma used; or a directory of\n"
             "PGM frames), streamed frame by frame. Writes frame,x,y,theta_deg,depth,votes,score,status per frame\n"
-            "(to stdout without -o).",
+            "(to stdout without -o).\n"
+            "By default the tracking session runs (docs/tracking.md): the motion filter (a Kalman filter placing\n"
+            "the ROI, gating candidates and grading confidence), sub-cell refinement, recovery once lost, and depth\n"
+            "and angle by intensity with the focus stack the table carries (tables built from images). --plain\n"
+            "runs the thesis's loop instead: each frame's best cell, nothing added.",
             {{"--table", "T", "table file", false, true},
              {"--frames", "SEQ", "Y4M file or directory of .pgm frames", false, true},
              {"--init", "X,Y[,THETA[,DEPTH]]", "pose before the first frame (image position of the reference point)", false, true},
+             {"--plain", "", "the thesis's loop: the best cell of each frame, no filter, refinement, recovery or\n"
+              "                          focus stack (add --motion-filter, --refine or --recover to it one by one)"},
              {"--binary", "", "use the binary detector on frames whatever the table says"},
              {"--voter", "auto|csr|dense", "voting method (default auto: dense when the table has <= 1024 cells); same results"},
-             {"--motion-filter", "", "predict the ROI, gate candidates by the motion model, grade confidence (thesis Alg. 4)"},
-             {"--refine", "", "sub-cell x, y, theta from a parabola through the neighbouring cells' scores"},
-             {"--recover", "", "once lost, search around the last confident pose until a confident hit"},
+             {"--motion-filter", "", "with --plain: predict the ROI, gate candidates, grade confidence (default on)"},
+             {"--refine", "", "with --plain: sub-cell x, y, theta from the neighbouring cells' scores (default on)"},
+             {"--recover", "", "with --plain: once lost, search around the last confident pose (default on)"},
              {"--coarse", "T", "table for the recovery search (larger cells, wider window): its 8 best cells\n"
                                   "are checked by the table instead of the search grid (implies --recover)"},
              {"--search-budget", "N", "recovery grid placements per search beyond the nearest 9, 1..558 (default: all\n"
@@ -33,10 +40,12 @@ int track(const std::vector<std::string>& argv) {
              {"--screen-stride", "N", "recovery placements are screened with every N-th feature, 1..16 (default 2)"},
              {"--search-interval", "N", "search every N-th lost frame, 1..100 (default 1; the frames between only\n"
                                        "predict, so a lost period costs about 1/N)"},
-             {"--threads", "N", "vote each frame on N threads (plain loop only; same output), 1..64 (default 1)"},
-             {"--focus-stack", "A.pgm,B.pgm,...", "the table's model images, one per depth: choose each frame's depth by\n"
-                                                  "intensity (normalised cross-correlation) at the tracked pose, and\n"
-                                                  "report the angle found the same way"},
+             {"--threads", "N", "vote each frame on N threads, 1..64 (default 1): the plain loop only (implies --plain;\n"
+              "                          same output as one thread)"},
+             {"--focus-stack", "A.pgm,B.pgm,...", "model images, one per depth, instead of those the table carries: each\n"
+                                                  "frame's depth (and the reported angle) by intensity (normalised\n"
+                                                  "cross-correlation) at the tracked pose"},
+             {"--no-focus-stack", "", "ignore the table's model images: depth from the winning stencils only"},
              {"-o", "POSES.csv", "pose output (default stdout)"},
              {"--stats", "STATS.json", "per-frame timing and vote statistics"}});
   if (!args.parse(argv)) return 0;
@@ -47,18 +56,20 @@ int track(const std::vector<std::string>& argv) {
   host::TrackingOptions options;
   options.voter = voter;
   if (args.has("--binary")) options.detector = Detector{table_format::DetectorKind::kBinary, 0};
-  options.session.motion_filter = args.has("--motion-filter");
-  options.session.refine = args.has("--refine");
-  options.session.recover = args.has("--recover") || args.has("--coarse");
+  options.threads = static_cast<unsigned>(args.integer("--threads", 1, 1, 64));
+  const bool session_flags = args.has("--motion-filter") || args.has("--refine") || args.has("--recover") || args.has("--coarse");
+  if (options.threads > 1 && (session_flags || args.has("--focus-stack")))
+    throw app::UsageError("--threads applies to the plain loop, without --motion-filter, --refine, --recover, --coarse or --focus-stack");
+  const bool plain = args.has("--plain") || options.threads > 1;
+  if (args.has("--focus-stack") && args.has("--no-focus-stack")) throw app::UsageError("give one of --focus-stack and --no-focus-stack");
+  options.session = app::session_options(plain, args.has("--motion-filter"), args.has("--refine"),
+                                         args.has("--recover") || args.has("--coarse"));
+  options.table_focus_stack = !plain && !args.has("--no-focus-stack");
   options.session.recovery.budget = static_cast<std::uint32_t>(args.integer("--search-budget", 0, 1, 558));
   options.session.recovery.interval = static_cast<std::uint32_t>(args.integer("--search-interval", 1, 1, 100));
   options.session.recovery.screen_stride = static_cast<std::uint32_t>(args.integer("--screen-stride", 2, 1, 16));
-  options.threads = static_cast<unsigned>(args.integer("--threads", 1, 1, 64));
-  if (options.threads > 1 && (options.session.motion_filter || options.session.refine || options.session.recover))
-    throw app::UsageError("--threads applies to the plain loop, without --motion-filter, --refine, --recover or --coarse");
   std::vector<std::string> focus_stack_paths;
   if (args.has("--focus-stack")) {
-    if (options.threads > 1) throw app::UsageError("--focus-stack needs the session loop; drop --threads");
     std::string list = args.get("--focus-stack");
     for (std::size_t start = 0; start <= list.size();) {
       const std::size_t comma = std::min(list.find(',', start), list.size());

@@ -5,6 +5,7 @@ set -euo pipefail
 packages=(
   build-essential cmake ninja-build git python3
   googletest libgtest-dev
+  libeigen3-dev           # the kernel's motion filter (fixed-size Eigen, headers only)
   g++-aarch64-linux-gnu g++-arm-linux-gnueabihf qemu-user qemu-system-arm
   gcc-arm-none-eabi libnewlib-arm-none-eabi libstdc++-arm-none-eabi-newlib
   libopencv-imgproc-dev   # gabarit bench's peer (matchTemplate); never linked into the tracker

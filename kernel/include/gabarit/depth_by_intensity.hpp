@@ -36,8 +36,12 @@ inline constexpr std::uint32_t kMaxStackStep = 256;
 // 65535 depths, or a pose outside pose_in_range or |theta| >= 1e5; `depth` is
 // then left unchanged. When fewer than 16 samples fall inside the frame (the
 // object is leaving it) there is nothing to compare: kOk, `depth` unchanged.
+// With a switch_margin, `depth` (the current one, e.g. the votes' choice)
+// is kept unless another depth's score beats its score by the margin
+// (hysteresis; kInvalidArgument outside [0, 2]); 0 takes the best-correlated
+// depth, the current one on a tie.
 [[nodiscard]] Status depth_by_intensity(const ImageView& frame, const Pose& pose, const FocusStack& stack,
-                                        std::uint16_t& depth) noexcept;
+                                        std::uint16_t& depth, float switch_margin = 0.0f) noexcept;
 
 // The angle by intensity: the stack image of pose.depth correlated with the
 // frame (sampled bilinearly) at the pose's angle plus -1.5 .. +1.5 degrees in

@@ -11,17 +11,25 @@
 //   high          s1 >= high_ratio * r and s1 - s2 >= high_margin * r
 //   none          s1 < low_ratio * r, or no candidate within the gate
 //   intermediate  otherwise
-// Per frame, with m the measured motion (this frame's pose - the previous one):
-//   high          v <- (1 - K1) v + K1 m     uncertainty <- 0
-//   intermediate  v <- (1 - K2) v + K2 m     uncertainty += U1
-//   none          v <- K3 v (pose = the prediction)   uncertainty += U2
+// Motion: a constant-velocity Kalman filter per axis (x, y, theta; state =
+// position and velocity, unit time step, white-noise acceleration of
+// variance accel_var, theta's theta_accel_var). Each frame's measurement is
+// the chosen cell's pose with a variance set by its confidence:
+//   high          position variance meas_var_high, angle theta_meas_var_high
+//   intermediate  meas_var_intermediate, theta_meas_var_intermediate
+//   none          no measurement: the filter only predicts (coasts)
+// An angle the votes do not constrain (TrackingSession's observability test)
+// is not measured. The uncertainty is the position's variance var x + var y;
+// the target is lost when it passes lost_uncertainty_px^2 (about 7 frames
+// without a measurement after a confident one). The filter is Eigen fixed-size algebra on
+// floats (no heap; Eigen is a private dependency of the kernel).
 // The ROI of the next frame is centred on pose + v. The n best cells are taken
-// in rank order and the first whose position lies within gate_px +
-// uncertainty of the prediction is chosen; a better-ranked cell outside the
+// in rank order and the first whose squared distance from the prediction is
+// within gate_px^2 + 4 (predicted var x + var y) (two standard deviations
+// beyond the gate) is chosen; a better-ranked cell outside the
 // gate is a distractor and is skipped. The depth has inertia too: the chosen
 // cell changes it only if it beats the current depth's best cell by
-// depth_switch_margin. When the uncertainty passes
-// lost_uncertainty_px the target is lost and recovery takes over
+// depth_switch_margin. When the target is lost, recovery takes over
 // (recovery_search.hpp). A TrackingSession (tracking_session.hpp) runs this
 // filter around each frame's vote: predict, choose (the gate), grade, then
 // update or coast.
@@ -45,11 +53,14 @@ struct MotionFilterParams {
   float high_margin = 0.0f;     // neighbouring cells score alike: off by default
   float low_ratio = 0.5f;
   float reference_gain = 0.1f;  // r <- (1 - g) r + g s1 on high-confidence frames
-  float k1 = 0.5f;
-  float k2 = 0.2f;
-  float k3 = 0.8f;
-  float u1 = 0.5f;
-  float u2 = 2.0f;
+  // The Kalman filter's noise (pixels^2, degrees^2; per frame).
+  float accel_var = 0.5f;
+  float meas_var_high = 0.25f;
+  float meas_var_intermediate = 2.0f;
+  float theta_accel_var = 0.05f;
+  float theta_meas_var_high = 0.1f;
+  float theta_meas_var_intermediate = 1.0f;
+  float initial_speed_var = 4.0f;    // velocity variance at the start and after a reacquisition
   float gate_px = 8.0f;
   float lost_uncertainty_px = 12.0f;
   std::uint8_t candidates = 4;  // 1..kMaxCandidates
@@ -63,7 +74,14 @@ struct MotionFilterState {
   float vx = 0.0f;      // pixels per frame
   float vy = 0.0f;
   float vtheta = 0.0f;  // degrees per frame
-  float uncertainty_px = 0.0f;
+  float position_variance = 0.0f;  // var x + var y (pixels^2) after this frame
+};
+
+// One axis of the constant-velocity Kalman filter: [position, velocity] and
+// its covariance (row-major 2x2), plain floats so the header needs no Eigen.
+struct KalmanAxis {
+  float position = 0.0f, velocity = 0.0f;
+  float covariance[4] = {0.0f, 0.0f, 0.0f, 0.0f};
 };
 
 Confidence classify(float score, float next_score, float reference, const MotionFilterParams& params) noexcept;
@@ -86,20 +104,17 @@ struct GatedChoice {
 // valid(params) (TrackingSession::start checks it).
 class MotionFilter {
  public:
-  void reset(const MotionFilterParams& params) noexcept {
-    params_ = params;
-    state_ = {};
-    reference_ = 0.0f;
-  }
-  // Velocity and uncertainty back to zero (a reacquired target); the
-  // reference score is kept.
-  void restart() noexcept { state_ = {}; }
+  // Starts at `pose`, at rest, with the velocity uncertain.
+  void reset(const MotionFilterParams& params, const Pose& pose) noexcept;
+  // At `pose` again, velocity zero (a reacquired target); the reference
+  // score is kept.
+  void restart(const Pose& pose) noexcept;
 
   // Where the next ROI goes: pose + v.
   Pose predict(const Pose& pose) const noexcept;
   // The gate: the n best cells of this frame's vote (counters, ROI centred on
   // (cx, cy), measured from `predicted`) in rank order; the first within
-  // gate_px + uncertainty of the prediction. A cell of another depth than
+  // gate (above) of the prediction. A cell of another depth than
   // current_depth must beat the current depth's best cell by
   // depth_switch_margin. Errors: select_top_cells'.
   Status choose(const TableView& table, std::span<const VoteCounter> counters, const Pose& predicted, std::int32_t cx,
@@ -111,18 +126,24 @@ class MotionFilter {
   Confidence classify(float score, float next_score) const noexcept {
     return gabarit::classify(score, next_score, reference_, params_);
   }
-  // A measurement of confidence high or intermediate, taken from `previous`.
-  void update(Confidence confidence, const Pose& previous, const Pose& measured) noexcept;
-  // No measurement: v <- K3 v, uncertainty += U2.
+  // One frame with a measurement of confidence high or intermediate (the
+  // angle only if theta_measured): predict, then correct.
+  void update(Confidence confidence, const Pose& measured, bool theta_measured = true) noexcept;
+  // One frame without a measurement: predict only.
   void coast() noexcept;
-  // The uncertainty has passed lost_uncertainty_px.
-  bool lost() const noexcept { return state_.uncertainty_px > params_.lost_uncertainty_px; }
+  // The position's standard deviation has passed lost_uncertainty_px.
+  bool lost() const noexcept {
+    return state_.position_variance > params_.lost_uncertainty_px * params_.lost_uncertainty_px;
+  }
 
   const MotionFilterState& state() const noexcept { return state_; }
   float reference() const noexcept { return reference_; }
 
  private:
+  void publish() noexcept;  // state_ from the axes
+
   MotionFilterParams params_;
+  KalmanAxis axes_[3];      // x, y, theta
   MotionFilterState state_;
   float reference_ = 0.0f;  // running score of high-confidence frames
 };

@@ -10,7 +10,10 @@ namespace gabarit::table_format {
 
 inline constexpr char kMagic[8] = {'G', 'B', 'R', 'T', 'L', 'U', 'T', '\0'};
 inline constexpr std::uint16_t kVersionMajor = 1;
-inline constexpr std::uint16_t kVersionMinor = 0;
+// 1.1 added the optional model-images section (kFlagModelImages); a table
+// without it is written as 1.0, byte for byte as before.
+inline constexpr std::uint16_t kVersionMinor = 1;
+inline constexpr std::uint32_t kFlagModelImages = 1u;  // the only flag; others must be 0
 
 inline constexpr std::uint32_t kHeaderBytes = 160;
 inline constexpr std::uint32_t kCellDescriptorBytes = 32;
@@ -40,6 +43,9 @@ inline constexpr std::uint32_t kMaxRoiWindowSide = 2048;
 // A gradient detector's threshold: at most the largest Sobel L1 magnitude of
 // an 8-bit image (features.hpp's kMaxGradientMagnitude).
 inline constexpr std::uint16_t kMaxDetectorThreshold = 2040;
+// The model images (one 8-bit image per depth, model_width x model_height)
+// take at most this many bytes in all.
+inline constexpr std::uint32_t kMaxModelImageBytes = 1u << 26;
 
 // Side of the square image window that contains the ROI rotated by any angle:
 // 2 * ceil(r) + 1 where r is the ROI corner farthest from the ROI centre.
@@ -63,7 +69,7 @@ inline constexpr std::size_t kVersionMinor = 10;       // u16
 inline constexpr std::size_t kHeaderBytes = 12;        // u32 = 160
 inline constexpr std::size_t kFileBytes = 16;          // u32, whole table
 inline constexpr std::size_t kCrc32 = 20;              // u32, CRC-32 of every byte except these four
-inline constexpr std::size_t kFlags = 24;              // u32, must be 0 in v1.0
+inline constexpr std::size_t kFlags = 24;              // u32: 0, or kFlagModelImages (v1.1)
 inline constexpr std::size_t kCellCount = 28;          // u32
 inline constexpr std::size_t kReferenceCount = 32;     // u32
 inline constexpr std::size_t kRoiWidth = 36;           // u16
@@ -91,7 +97,8 @@ inline constexpr std::size_t kPixelOffsetsOffset = 124;  // u32
 inline constexpr std::size_t kReferencesOffset = 128;  // u32
 inline constexpr std::size_t kModelCountsOffset = 132; // u32: depth_count x u32
 inline constexpr std::size_t kModelPointsOffset = 136; // u32: model_point_count x (i16, i16)
-inline constexpr std::size_t kReserved140 = 140;       // 20 bytes, must be 0
+inline constexpr std::size_t kModelImagesOffset = 140; // u32 (v1.1): depth_count x model_width x model_height u8, 0 if absent
+inline constexpr std::size_t kReserved144 = 144;       // 16 bytes, must be 0
 }  // namespace offset
 
 // Cell descriptor field offsets (bytes from the start of the descriptor).
@@ -125,6 +132,7 @@ struct LayoutCounts {
   std::uint8_t reference_bytes = 0;    // narrowest_reference_bytes(cell_count)
   std::uint16_t depth_count = 0;
   std::uint32_t model_point_count = 0;
+  std::uint32_t model_image_bytes = 0;  // 0: no model-images section
 };
 // Where each section starts, and the file's size: the sections follow the
 // header in this order, each 8-byte aligned, with no gaps beyond alignment
@@ -138,6 +146,7 @@ struct Layout {
   std::uint32_t references = 0;     // reference_count x reference_bytes
   std::uint32_t model_counts = 0;   // depth_count x u32
   std::uint32_t model_points = 0;   // model_point_count x (i16, i16)
+  std::uint32_t model_images = 0;   // model_image_bytes (where it would start if absent)
   std::uint32_t file_bytes = 0;
 };
 constexpr Layout layout_of(const LayoutCounts& n) noexcept {
@@ -147,7 +156,8 @@ constexpr Layout layout_of(const LayoutCounts& n) noexcept {
   l.references = align_up(l.pixel_offsets + (n.roi_pixels + 1) * 4);
   l.model_counts = align_up(l.references + n.reference_count * n.reference_bytes);
   l.model_points = align_up(l.model_counts + std::uint32_t{n.depth_count} * 4);
-  l.file_bytes = align_up(l.model_points + n.model_point_count * kModelPointBytes);
+  l.model_images = align_up(l.model_points + n.model_point_count * kModelPointBytes);
+  l.file_bytes = align_up(l.model_images + n.model_image_bytes);
   return l;
 }
 // The worked example of docs/table-format.md: 3 cells, a 2 x 2 ROI, 5
@@ -159,7 +169,7 @@ static_assert(layout_of({3, 4, 5, 1, 1, 3}).pixel_offsets == 256 && layout_of({3
 // The largest table the limits allow still fits a 32-bit size.
 static_assert(std::uint64_t{kHeaderBytes} + std::uint64_t{kMaxCells} * kCellDescriptorBytes + (kMaxRoiPixels + 1ull) * 4 +
                       std::uint64_t{kMaxReferences} * 4 + kMaxDepths * 4ull + std::uint64_t{kMaxModelPoints} * kModelPointBytes +
-                      5 * kSectionAlignment <
+                      kMaxModelImageBytes + 6 * kSectionAlignment <
                   (1ull << 32),
               "every section sum stays inside 32 bits");
 

@@ -10,6 +10,7 @@
 #include <span>
 
 #include "gabarit/byte_order.hpp"
+#include "gabarit/image_view.hpp"
 #include "gabarit/status.hpp"
 #include "gabarit/table_format.hpp"
 
@@ -119,6 +120,16 @@ class TableView {
     return {load_le<std::int16_t>(p), load_le<std::int16_t>(p + 2)};
   }
 
+  // The model images the table was built from, one per depth (v1.1 tables
+  // built from images; the focus stack depth_by_intensity.hpp compares).
+  bool has_model_images() const noexcept { return model_images_ != nullptr; }
+  // Precondition: has_model_images(), depth < depth_count().
+  ImageView model_image(std::uint16_t depth) const noexcept {
+    const std::size_t w = model_width(), h = model_height();
+    return ImageView{reinterpret_cast<const std::uint8_t*>(model_images_) + std::size_t{depth} * w * h,
+                     static_cast<std::uint32_t>(w), static_cast<std::uint32_t>(h), w};
+  }
+
  private:
   Axis read_axis(std::size_t at) const noexcept {
     return {load_le<float>(base_ + at), load_le<float>(base_ + at + 4), load_le<std::uint32_t>(base_ + at + 8)};
@@ -130,6 +141,7 @@ class TableView {
   const std::byte* references_ = nullptr;
   const std::byte* model_counts_ = nullptr;
   const std::byte* model_points_ = nullptr;
+  const std::byte* model_images_ = nullptr;  // null: no model-images section
   std::uint32_t file_bytes_ = 0;
   std::uint32_t cell_count_ = 0;
   std::uint32_t reference_count_ = 0;

@@ -28,9 +28,24 @@ struct SessionOptions {
   bool recover = true;  // search for the target once lost (else keep predicting)
   RecoveryOptions recovery;
   MotionFilterParams filter;
+  // With the motion filter: when the vote at the prediction is not of high
+  // confidence, vote at the last pose too and keep the better measurement.
+  bool vote_at_last_pose = true;
+  // With the motion filter: a frame without a measurement it trusts takes
+  // the plain loop's pose (the best cell at the last pose) instead of the
+  // prediction; the filter still only predicts (and may declare it lost).
+  bool follow_when_unsure = true;
+  // The sub-cell angle is taken from the votes only where they constrain it:
+  // the chosen cell must outscore its neighbours along theta by this fraction
+  // of its score; else the angle is the cell's (a near-symmetric outline),
+  // as in the plain loop. 0.05 was chosen on the scene suite's tuning half.
+  float theta_observability = 0.05f;
+  // With a focus stack: the depth by intensity replaces the votes' depth
+  // only if it correlates better by this much (depth_by_intensity.hpp).
+  float depth_switch_correlation = 0.0f;
 };
 // track_step frame after frame, nothing added: the thesis's tracker.
-inline constexpr SessionOptions kPlainSession{false, false, false, {}, {}};
+inline constexpr SessionOptions kPlainSession{false, false, false, {}, {}, false, false, 0.0f, 0.0f};
 
 struct SessionResult {
   Pose pose;                 // the session's estimate after this frame
@@ -61,7 +76,19 @@ class TrackingSession {
   const MotionFilterState& motion() const noexcept { return filter_.state(); }
   bool lost() const noexcept { return lost_; }
 
+ // One vote and the gate's choice in it (public for the comparison helper).
+  struct Measurement {
+    StepResult step;
+    Confidence confidence = Confidence::kNone;
+    float score = 0.0f, next_score = 0.0f;
+    Pose pose;                     // the chosen cell's pose, refined
+    bool theta_observable = true;
+  };
+
  private:
+  Status measure_at(const ImageView& image, const Pose& centre, SessionScratch scratch, Measurement& m) noexcept;
+  bool theta_observable(std::span<const VoteCounter> counters, std::uint32_t cell) const noexcept;
+  bool on_translation_border(std::uint32_t cell) const noexcept;
   Status track_fine(const ImageView& image, SessionScratch scratch, SessionResult& out) noexcept;
   Status recover(const ImageView& image, SessionScratch scratch, SessionResult& out) noexcept;
   void begin_lost() noexcept;

@@ -92,6 +92,7 @@ ModelStack model_from_images(const std::vector<std::string>& paths, const ImageM
     } else if (image.width != model.image_width || image.height != model.image_height) {
       throw app::Error(paths[i] + ": focus-stack images must all have the size of " + paths[0]);
     }
+    model.images.push_back(image.pixels);
     const ImageWindow whole{0, 0, static_cast<std::uint16_t>(image.width), static_cast<std::uint16_t>(image.height)};
     std::vector<RoiPoint> found(feature_capacity(whole.width, whole.height));
     FeatureCount count;

@@ -163,14 +163,25 @@ std::vector<std::byte> serialise_table(const ModelStack& model, const BuildOptio
   std::uint32_t model_points = 0;
   for (const auto& d : model.depths) model_points += static_cast<std::uint32_t>(d.size());
   const std::uint8_t ref_bytes = tf::narrowest_reference_bytes(cell_count);
-  const tf::Layout layout = tf::layout_of(
-      {cell_count, pixels, references, ref_bytes, static_cast<std::uint16_t>(model.depths.size()), model_points});
+  const bool images = options.store_model_images && !model.images.empty();
+  std::uint64_t image_bytes = 0;
+  if (images) {
+    if (model.images.size() != model.depths.size()) throw app::Error("table: one model image per depth expected");
+    image_bytes = std::uint64_t{model.image_width} * model.image_height * model.images.size();
+    for (const auto& image : model.images)
+      if (image.size() != std::size_t{model.image_width} * model.image_height) throw app::Error("table: model image of the wrong size");
+    if (image_bytes > tf::kMaxModelImageBytes)
+      throw app::Error("table: the model images take " + std::to_string(image_bytes) + " bytes, above the format's " +
+                       std::to_string(tf::kMaxModelImageBytes) + "; build with --no-model-images");
+  }
+  const tf::Layout layout = tf::layout_of({cell_count, pixels, references, ref_bytes, static_cast<std::uint16_t>(model.depths.size()),
+                                           model_points, static_cast<std::uint32_t>(image_bytes)});
 
   std::vector<std::byte> out(layout.file_bytes, std::byte{0});
   std::byte* b = out.data();
   std::memcpy(b + off::kMagic, tf::kMagic, sizeof tf::kMagic);
   store_le<std::uint16_t>(b + off::kVersionMajor, tf::kVersionMajor);
-  store_le<std::uint16_t>(b + off::kVersionMinor, tf::kVersionMinor);
+  store_le<std::uint16_t>(b + off::kVersionMinor, images ? std::uint16_t{1} : std::uint16_t{0});  // 1.0 without images
   store_le<std::uint32_t>(b + off::kHeaderBytes, tf::kHeaderBytes);
   store_le<std::uint32_t>(b + off::kFileBytes, layout.file_bytes);
   store_le<std::uint32_t>(b + off::kCellCount, cell_count);
@@ -201,6 +212,12 @@ std::vector<std::byte> serialise_table(const ModelStack& model, const BuildOptio
   store_le<std::uint32_t>(b + off::kReferencesOffset, layout.references);
   store_le<std::uint32_t>(b + off::kModelCountsOffset, layout.model_counts);
   store_le<std::uint32_t>(b + off::kModelPointsOffset, layout.model_points);
+  if (images) {
+    store_le<std::uint32_t>(b + off::kFlags, tf::kFlagModelImages);
+    store_le<std::uint32_t>(b + off::kModelImagesOffset, layout.model_images);
+    for (std::size_t d = 0; d < model.images.size(); ++d)
+      std::memcpy(b + layout.model_images + d * model.images[d].size(), model.images[d].data(), model.images[d].size());
+  }
 
   namespace co = tf::cell_offset;
   for (std::uint32_t c = 0; c < cell_count; ++c) {

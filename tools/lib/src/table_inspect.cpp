@@ -50,7 +50,8 @@ std::string inspect_json(const TableView& t) {
   o << ",\n    \"depths\": " << t.depth_count() << "\n  },\n";
   o << "  \"detector\": {\"kind\": \"" << detector_name(t.detector_kind()) << "\", \"threshold\": " << t.detector_threshold() << "},\n";
   o << "  \"model\": {\"points\": " << t.model_point_count() << ", \"ref_x\": " << t.model_ref_x() << ", \"ref_y\": " << t.model_ref_y()
-    << ", \"image_width\": " << t.model_width() << ", \"image_height\": " << t.model_height() << "},\n";
+    << ", \"image_width\": " << t.model_width() << ", \"image_height\": " << t.model_height()
+    << ", \"images_stored\": " << (t.has_model_images() ? "true" : "false") << "},\n";
   o << "  \"keep_ratio\": " << t.keep_ratio() << ",\n  \"seed\": " << t.seed() << ",\n";
   o << "  \"refs_per_pixel_histogram\": {";
   bool first = true;

@@ -96,6 +96,8 @@ void run_tracking(const TableView& table, app::FrameSource& frames, const Pose& 
     stack = FocusStack{stack_views, table.model_ref_x(), table.model_ref_y(), 2};
     session.use_focus_stack(&stack);
   }
+  const app::TableFocusStack stored(table);
+  if (options.focus_stack.empty() && options.table_focus_stack) session.use_focus_stack(stored.get());
   app::GrayImage frame;
   app::TrackRow row;
   SessionResult result;

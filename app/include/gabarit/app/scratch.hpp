@@ -8,6 +8,7 @@
 #include <optional>
 #include <vector>
 
+#include "gabarit/depth_by_intensity.hpp"
 #include "gabarit/table_view.hpp"
 #include "gabarit/tracker.hpp"
 #include "gabarit/tracking_session.hpp"
@@ -48,6 +49,28 @@ class SessionBuffers {
   TrackerBuffers fine_;
   std::optional<TrackerBuffers> coarse_;
   std::vector<RoiPoint> search_features_;
+};
+
+// The session a program runs: the defaults (SessionOptions{}), or with
+// `plain` the thesis's loop (kPlainSession) with only the parts asked for
+// added, the motion filter bringing its own defaults. gabarit track and
+// gabarit-board read --plain, --motion-filter, --refine, --recover into it.
+SessionOptions session_options(bool plain, bool motion_filter, bool refine, bool recover);
+
+// The focus stack a table carries (format 1.1: the model images it was built
+// from), as TrackingSession::use_focus_stack takes it. get() is null for a
+// table without images. The table must outlive it; it is not copyable (the
+// stack points at its own views).
+class TableFocusStack {
+ public:
+  explicit TableFocusStack(const TableView& table);
+  TableFocusStack(const TableFocusStack&) = delete;
+  TableFocusStack& operator=(const TableFocusStack&) = delete;
+  const FocusStack* get() const { return views_.empty() ? nullptr : &stack_; }
+
+ private:
+  std::vector<ImageView> views_;
+  FocusStack stack_;
 };
 
 }  // namespace gabarit::app

@@ -31,6 +31,10 @@ struct ModelStack {
   std::uint16_t image_width = 0;           // 0 for point models
   std::uint16_t image_height = 0;
   DetectorSettings detector;
+  // The model images themselves (image_width x image_height each, one per
+  // depth) when built from images; stored in the table (format 1.1) so the
+  // tracker has its focus stack without being given it again.
+  std::vector<std::vector<std::uint8_t>> images;
 };
 
 // Points CSV: one integer "x,y" per line relative to the reference point; an

@@ -1,20 +1,29 @@
 // Grayscale test sequences for 4-DOF tracking (the microscope case of the
 // thesis, section 6.1), built from real photographs of Debian's
-// python3-skimage at run time:
-//   - the object: a five-lobed cog cut from `camera.png` (the cameraman), 2x
-//     downscaled (its outline shows its orientation);
-//   - the background: a cluttered real texture (`gravel.png`);
-//   - a smooth known trajectory in x, y and theta (sums of slow sines), and a
-//     depth that walks through the focus stack;
-//   - a slow illumination change (gain and offset), Gaussian sensor noise,
-//     motion blur on a few frames, and an occlusion of `occlusion_frames`
-//     frames by a patch of another photograph (`brick.png`);
-//   - a focus stack: the object is *tilted*, so at depth n its blur grows with
-//     the distance of each column from the column in focus, which moves across
-//     the object with n. No two depths look alike.
-// Outputs frames.y4m, gt.csv (frame,x,y,theta_deg,depth,visible) and the model
-// stack model_NN.pgm (the object at theta 0 on mid-grey, one per depth, the
+// python3-skimage at run time, never committed. A scene is
+//   - an object cut from a photograph (SceneObject): asymmetric, near
+//     symmetric (a coin), elongated and self-similar (a pipette), small
+//     (~40 px) or large (~200 px);
+//   - over a background (SceneBackground): a cluttered real texture, tiled;
+//   - moving along a trajectory (SceneMotion) in x, y and theta, and through
+//     a focus stack (SceneOptions::depths);
+//   - with a slow illumination change (gain), Gaussian sensor noise, motion
+//     blur on a few frames, and an occlusion (OcclusionSide) by a patch of
+//     another photograph (`brick.png`) that covers the object at once or
+//     slides in from one side and out again;
+//   - a focus stack (FocusStackKind): the object *tilted*, so at depth n its
+//     blur grows with the distance of each column from the column in focus,
+//     which moves across the object with n (no two depths alike); or blurred
+//     evenly, with two neighbouring depths almost alike.
+// Outputs frames.y4m, gt.csv (frame,x,y,theta_deg,depth,visible: visible is 0
+// while more than a quarter of the object is hidden) and the model stack
+// model_NN.pgm (the object at theta 0 on mid-grey, one per depth, the
 // reference point at the image centre). Same options, same bytes.
+//
+// The scene suite (suite_scene) is a fixed list of such scenes, mixing every
+// object, background, motion and occlusion side; half its scenes are for
+// tuning and the other half held out (suite_held_out), each half holding every
+// object twice. docs/scene-suite.md describes it.
 #pragma once
 
 #include <cstdint>
@@ -22,17 +31,55 @@
 
 namespace gabarit::host {
 
+enum class SceneObject : std::uint8_t {
+  kCog,        // a five-lobed cog cut from camera.png (the default, asymmetric)
+  kCoin,       // one coin of coins.png, ~42 px across: near-circular outline, relief inside
+  kHorse,      // the silhouette of horse.png filled with moon.png's texture (asymmetric)
+  kPipette,    // a tapered glass tube ~180 px long: elongated and self-similar
+  kCat,        // chelsea.png's head in an ellipse
+  kAstronaut,  // astronaut.png's helmet and face in a disk, ~60 px
+  kCup,        // coffee.png's cup and saucer in an ellipse
+  kLarge,      // camera.png at full scale in a rounded square ~200 px wide
+};
+enum class SceneBackground : std::uint8_t { kGravel, kGrass, kBrick, kMoon, kPage, kSmooth };
+enum class SceneMotion : std::uint8_t {
+  kSmooth,  // slow sines in x, y and theta
+  kWalk,    // a velocity random walk that reverses at the image margins
+  kStopGo,  // the smooth path travelled in bursts: stops, then up to 1.6x the speed
+  kSpin,    // a fast steady rotation (~1.2 deg/frame) and a slow drift
+  kSweep,   // the smooth path, slower, with the depth stepping every 6 frames
+};
+enum class OcclusionSide : std::uint8_t { kNone, kCover, kLeft, kRight, kTop, kBottom };
+enum class FocusStackKind : std::uint8_t { kTilted, kAlike };
+
+const char* name_of(SceneObject v) noexcept;
+const char* name_of(SceneBackground v) noexcept;
+const char* name_of(SceneMotion v) noexcept;
+const char* name_of(OcclusionSide v) noexcept;
+const char* name_of(FocusStackKind v) noexcept;
+// Parse a name (as name_of prints it); false if it names nothing.
+bool parse_scene_name(const std::string& s, SceneObject& out);
+bool parse_scene_name(const std::string& s, SceneBackground& out);
+bool parse_scene_name(const std::string& s, SceneMotion& out);
+bool parse_scene_name(const std::string& s, OcclusionSide& out);
+bool parse_scene_name(const std::string& s, FocusStackKind& out);
+
 struct SceneOptions {
   std::uint32_t frames = 240;
-  std::uint32_t width = 384;
+  std::uint32_t width = 384;   // 0 (with height 0): the object's own default size
   std::uint32_t height = 288;
   std::uint16_t depths = 1;              // focus-stack images (1: no depth change)
+  SceneObject object = SceneObject::kCog;
+  SceneBackground background = SceneBackground::kGravel;
+  SceneMotion motion = SceneMotion::kSmooth;
+  OcclusionSide occlusion_side = OcclusionSide::kCover;
+  FocusStackKind stack = FocusStackKind::kTilted;
   double max_speed_px = 2.5;             // largest per-frame translation of the trajectory
-  double max_turn_deg = 1.0;             // largest per-frame rotation
+  double max_turn_deg = 1.0;             // largest per-frame rotation (kSpin: its steady rate is 1.2)
   double noise_sigma = 3.0;              // grey levels
   double illumination = 0.2;             // gain swings between 1 - this and 1 + this
   std::uint32_t occlusion_start = 100;   // first occluded frame (0 frames: none)
-  std::uint32_t occlusion_frames = 18;
+  std::uint32_t occlusion_frames = 18;   // frames fully covered (a sliding occluder also takes 8 to enter and 8 to leave)
   std::uint32_t blur_every = 50;         // a motion-blurred frame every N frames (0: none)
   std::uint64_t seed = 1;
 };
@@ -40,8 +87,21 @@ struct SceneOptions {
 struct SceneSummary {
   std::uint32_t object_radius = 0;
   std::uint32_t visible_frames = 0;
+  std::uint32_t width = 0, height = 0;
 };
 
+// The image size an object needs (its default when width and height are 0).
+void default_scene_size(SceneObject object, std::uint32_t& width, std::uint32_t& height) noexcept;
+
 SceneSummary write_scene_sequence(const SceneOptions& options, const std::string& dir);
+
+// The scene suite: scene `index` (0-based, any index; the suite proper is
+// 0..kSuiteScenes-1), seed index + 1.
+inline constexpr std::uint32_t kSuiteScenes = 32;
+SceneOptions suite_scene(std::uint32_t index, std::uint32_t frames = 160);
+// Held-out scenes: indices 8..15, 24..31, ... (never used for tuning).
+constexpr bool suite_held_out(std::uint32_t index) noexcept { return (index / 8) % 2 == 1; }
+// "cog-gravel-smooth-cover-d5-s1": the scene's name in reports.
+std::string scene_name(const SceneOptions& options);
 
 }  // namespace gabarit::host

@@ -22,6 +22,9 @@ struct BuildOptions {
   Decimation decimation = Decimation::kOverlap;
   TranslationPolicy translations = TranslationPolicy::kInsideElseClosest;
   std::uint64_t seed = 1;
+  // Store the model's images (when it has them) in the table: the focus
+  // stack depth and angle by intensity compare (table format 1.1).
+  bool store_model_images = true;
   // Called now and then with (cells done, cells total) while stencils are built.
   std::function<void(std::size_t, std::size_t)> progress;
 };

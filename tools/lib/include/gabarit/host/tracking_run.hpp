@@ -37,6 +37,9 @@ struct TrackingOptions {
   // given, each frame's depth is chosen by intensity at the tracked pose
   // (depth_by_intensity.hpp). Only with a session (not the --threads loop).
   std::vector<app::GrayImage> focus_stack;
+  // Without focus_stack: use the model images the table carries (format
+  // 1.1), if any, with a session that has the motion filter.
+  bool table_focus_stack = false;
   // The grid search detects features once per lost frame (scratch for it,
   // SessionScratch::search_features); false: a full track_step per placement,
   // as before (kept for the bench's comparison).

@@ -1,0 +1,57 @@
+// What the grayscale-scene benchmarks (--microscope, --suite) share: a scene
+// held in memory, so no method is timed reading files, and the OpenCV NCC
+// bank they are compared against.
+#pragma once
+
+#include <opencv2/core.hpp>
+
+#include <filesystem>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "gabarit/app/image_io.hpp"
+#include "gabarit/pose.hpp"
+
+namespace gabarit::bench {
+
+class MemoryFrames final : public app::FrameSource {
+ public:
+  explicit MemoryFrames(const std::vector<app::GrayImage>& f) : frames_(f) {}
+  bool next(app::GrayImage& out) override {
+    if (at_ >= frames_.size()) return false;
+    out = frames_[at_++];
+    return true;
+  }
+
+ private:
+  const std::vector<app::GrayImage>& frames_;
+  std::size_t at_ = 0;
+};
+
+std::vector<app::GrayImage> read_all_frames(const std::filesystem::path& y4m);
+// The model stack's image paths of a scene directory (model_NN.pgm).
+std::vector<std::string> scene_model_paths(const std::filesystem::path& seq, int depths);
+
+// OpenCV's exhaustive normalised cross-correlation over the tracker's 4-DOF
+// window: for every depth and every angle step of the table around the
+// current estimate, the model image rotated to that angle (a bank of
+// templates, rotated once per 0.5 degree and cached) is matched with
+// TM_CCOEFF_NORMED at every translation of +-range px; the best match is the
+// new pose.
+class NccBank {
+ public:
+  NccBank(const std::vector<app::GrayImage>& models, int range, double step_deg, int steps);
+  Pose track(const app::GrayImage& frame, const Pose& previous);
+
+ private:
+  const cv::Mat& rotated(std::size_t depth, double theta);
+  std::vector<cv::Mat> models_;
+  std::map<long, cv::Mat> cache_;
+  cv::Mat result_;
+  int range_;
+  double step_;
+  int steps_;
+};
+
+}  // namespace gabarit::bench

@@ -1,0 +1,23 @@
+// gabarit bench --suite: the default tracker, the thesis's plain loop and the
+// OpenCV NCC bank over the scene suite (scene_synth.hpp, docs/scene-suite.md),
+// each scene with its own table; per scene and per half (tuning, held out)
+// the median and the worst scene of every metric, and mean and p99 us/frame.
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+namespace gabarit::bench {
+
+struct SuiteOptions {
+  std::string out = "bench-out";
+  bool quick = false;             // 8 scenes of 60 frames
+  std::uint32_t scenes = 0;       // 0: all kSuiteScenes (quick: 8)
+  std::uint32_t frames = 0;       // 0: 160 (quick: 60)
+  bool peer = true;               // run the NCC bank too
+};
+
+// Writes DIR/suite.md and DIR/suite-scenes.csv; returns the exit code.
+int run_suite(const SuiteOptions& options);
+
+}  // namespace gabarit::bench
