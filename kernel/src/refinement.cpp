@@ -1,6 +1,11 @@
 #include "gabarit/refinement.hpp"
 
+// Eigen as in motion_filter.cpp: fixed-size floats, no heap, scalar code.
+#include <Eigen/Core>
+#include <Eigen/Cholesky>
+
 #include "gabarit/assert.hpp"
+#include "gabarit/deterministic_math.hpp"
 
 namespace gabarit {
 namespace {
@@ -40,6 +45,78 @@ SubCellOffset refine_within_cell(const TableView& table, std::span<const VoteCou
   if (it > 0 && it + 1 < at.cells)
     out.theta_deg = spacing(at) * vertex(score_of(table, counters, cell - stride_t), s0, score_of(table, counters, cell + stride_t));
   return out;
+}
+
+bool refine_by_alignment(const TableView& table, std::span<const RoiPoint> features, std::span<std::uint8_t> occupancy,
+                         std::uint32_t cell, SubCellOffset& out) noexcept {
+  out = SubCellOffset{};
+  GABARIT_ASSERT(cell < table.cell_count());
+  const std::uint32_t w = table.roi_width(), h = table.roi_height();
+  if (occupancy.size() < (std::size_t{w} * h + 7) / 8) return false;
+  // The features as a bitmap over the ROI.
+  for (std::size_t i = 0; i < (std::size_t{w} * h + 7) / 8; ++i) occupancy[i] = 0;
+  for (const RoiPoint& f : features) {
+    const std::size_t at = std::size_t{f.row} * w + f.col;
+    occupancy[at >> 3] = static_cast<std::uint8_t>(occupancy[at >> 3] | (1u << (at & 7u)));
+  }
+  const auto feature_at = [&](std::int32_t col, std::int32_t row) {
+    if (col < 0 || row < 0 || col >= static_cast<std::int32_t>(w) || row >= static_cast<std::int32_t>(h)) return false;
+    const std::size_t at = static_cast<std::size_t>(row) * w + static_cast<std::size_t>(col);
+    return ((occupancy[at >> 3] >> (at & 7u)) & 1u) != 0;
+  };
+  const CellBounds c = table.cell(cell);
+  const std::uint16_t depth = c.depth;
+  std::uint32_t first = 0;
+  for (std::uint16_t d = 0; d < depth; ++d) first += table.model_point_count(d);
+  const std::uint32_t count = table.model_point_count(depth);
+  const float ox = static_cast<float>(table.roi_origin_x()), oy = static_cast<float>(table.roi_origin_y());
+  constexpr float kRadians = 3.14159265358979f / 180.0f;
+
+  float dx = 0.0f, dy = 0.0f, dtheta_deg = 0.0f;
+  for (int iteration = 0; iteration < 2; ++iteration) {
+    const SinCos sc = sin_cos_deg(c.theta_centre_deg() + dtheta_deg);
+    const float tx = c.x_centre() + dx, ty = c.y_centre() + dy;
+    Eigen::Matrix3f normal = Eigen::Matrix3f::Zero();
+    Eigen::Vector3f rhs = Eigen::Vector3f::Zero();
+    std::uint32_t matches = 0;
+    for (std::uint32_t i = 0; i < count; ++i) {
+      const ModelPoint m = table.model_point(first + i);
+      // The model point placed, relative to the reference (qx, qy) and in ROI pixels (px, py).
+      const float qx = sc.cos * m.x - sc.sin * m.y, qy = sc.sin * m.x + sc.cos * m.y;
+      const float px = tx + qx - ox, py = ty + qy - oy;
+      const std::int32_t cx = round_to_int(px), cy = round_to_int(py);
+      float best = 1.0e9f, fx = 0.0f, fy = 0.0f;
+      for (std::int32_t v = -kAlignRadius; v <= kAlignRadius; ++v)
+        for (std::int32_t u = -kAlignRadius; u <= kAlignRadius; ++u) {
+          if (!feature_at(cx + u, cy + v)) continue;
+          const float ex = static_cast<float>(cx + u) - px, ey = static_cast<float>(cy + v) - py;
+          if (ex * ex + ey * ey < best) best = ex * ex + ey * ey, fx = ex, fy = ey;
+        }
+      if (best > static_cast<float>(2 * kAlignRadius * kAlignRadius)) continue;
+      ++matches;
+      // Residual (fx, fy) = feature - placed point; d(placed)/d(x, y, theta) = [1 0 -qy; 0 1 qx].
+      const Eigen::Vector3f jx(1.0f, 0.0f, -qy), jy(0.0f, 1.0f, qx);
+      normal += jx * jx.transpose() + jy * jy.transpose();
+      rhs += jx * fx + jy * fy;
+    }
+    if (matches < kAlignMinMatches) return false;
+    const Eigen::LDLT<Eigen::Matrix3f> solver(normal);
+    if (solver.info() != Eigen::Success || !(solver.vectorD().minCoeff() > 1.0e-3f)) return false;
+    const Eigen::Vector3f step = solver.solve(rhs);
+    if (!is_finite(step(0)) || !is_finite(step(1)) || !is_finite(step(2))) return false;
+    dx += step(0);
+    dy += step(1);
+    dtheta_deg += step(2) / kRadians;
+  }
+  const Axis ax = table.axis_x(), ay = table.axis_y(), at = table.axis_theta();
+  const auto clamp_half = [](float v, float spacing_of_axis) {
+    const float half = 0.5f * spacing_of_axis;
+    return v > half ? half : (v < -half ? -half : v);
+  };
+  out.x = ax.cells > 1 ? clamp_half(dx, spacing(ax)) : 0.0f;
+  out.y = ay.cells > 1 ? clamp_half(dy, spacing(ay)) : 0.0f;
+  out.theta_deg = at.cells > 1 ? clamp_half(dtheta_deg, spacing(at)) : 0.0f;
+  return true;
 }
 
 }  // namespace gabarit

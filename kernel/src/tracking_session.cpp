@@ -58,6 +58,19 @@ bool TrackingSession::on_translation_border(std::uint32_t cell) const noexcept {
   return (ax.cells > 2 && (ix == 0 || ix + 1 == ax.cells)) || (ay.cells > 2 && (iy == 0 || iy + 1 == ay.cells));
 }
 
+// The sub-cell offset of `cell` in the vote just made (`step`, whose
+// features and counters are still in scratch.fine): by aligning the features
+// when asked (falling back to the parabola when the alignment has too little
+// to go on), else by the parabola through the neighbouring cells' scores.
+SubCellOffset TrackingSession::sub_cell(SessionScratch scratch, const StepResult& step, std::uint32_t cell) const noexcept {
+  SubCellOffset o;
+  if (options_.align_features) {
+    const std::size_t n = step.features < scratch.fine.features.size() ? step.features : scratch.fine.features.size();
+    if (refine_by_alignment(fine_, scratch.fine.features.first(n), scratch.fine.roi_mask, cell, o)) return o;
+  }
+  return refine_within_cell(fine_, scratch.fine.counters, cell);
+}
+
 bool TrackingSession::theta_observable(std::span<const VoteCounter> counters, std::uint32_t cell) const noexcept {
   const Axis ax = fine_.axis_x(), ay = fine_.axis_y(), at = fine_.axis_theta();
   if (at.cells < 2) return true;  // nothing to choose: the angle is the prior's
@@ -87,7 +100,7 @@ Status TrackingSession::measure_at(const ImageView& image, const Pose& centre, S
     m.confidence = Confidence::kIntermediate;
   if (m.confidence == Confidence::kNone) return Status::kOk;
   SubCellOffset o;
-  if (options_.refine) o = refine_within_cell(fine_, scratch.fine.counters, choice.cell.cell);
+  if (options_.refine) o = sub_cell(scratch, m.step, choice.cell.cell);
   m.theta_observable = theta_observable(scratch.fine.counters, choice.cell.cell);
   if (!m.theta_observable) o.theta_deg = 0.0f;
   // Where the votes barely tell the angles apart (a near-symmetric outline)
@@ -114,7 +127,7 @@ Status TrackingSession::track_fine(const ImageView& image, SessionScratch scratc
     out.state = out.step.state;
     if (out.step.state != TrackState::kLost) {
       SubCellOffset o;
-      if (options_.refine) o = refine_within_cell(fine_, scratch.fine.counters, out.step.best.cell);
+      if (options_.refine) o = sub_cell(scratch, out.step, out.step.best.cell);
       pose_ = pose_of_cell(fine_, out.step.best.cell, predicted, out.step.roi_centre_x, out.step.roi_centre_y, o.x, o.y, o.theta_deg);
     }
     if (out.step.state == TrackState::kLost && options_.recover) begin_lost();

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "gabarit/app/image_io.hpp"
+#include "gabarit/tracker.hpp"
 #include "test_tables.hpp"
 
 namespace gabarit {
@@ -48,6 +49,35 @@ TEST(Refinement, AParabolaThroughThePeakFindsTheSubCellOffset) {
   set(centre + 1, 0.9f);
   set(centre, 0.2f);
   EXPECT_EQ(refine_within_cell(t, counters, centre).x, 0.0f);
+}
+
+// The alignment: features exactly where the cell puts the model give no
+// offset; the model one pixel to the right gives +1, clamped to half a cell;
+// too few features, or short scratch, give none (and false).
+TEST(Refinement, AligningTheFeaturesFindsTheirOffsetWithinTheCell) {
+  host::Rng rng(9);
+  const auto pts = testing::random_points(rng, 40, 10);
+  const auto bytes = build(point_model(pts), "-2:2:5", "-2:2:5");
+  const TableView t = testing::open_table(bytes);
+  const std::uint32_t centre_cell = 2 * 5 + 2;  // x 0, y 0
+  const auto features_at = [&](int dx, std::size_t count) {
+    std::vector<RoiPoint> f;
+    for (std::size_t i = 0; i < pts.size() && f.size() < count; ++i)
+      f.push_back({static_cast<std::uint16_t>(pts[i].x + dx - t.roi_origin_x()), static_cast<std::uint16_t>(pts[i].y - t.roi_origin_y())});
+    return f;
+  };
+  std::vector<std::uint8_t> occupancy(tracker_mask_bytes(t));
+  SubCellOffset o;
+  ASSERT_TRUE(refine_by_alignment(t, features_at(0, pts.size()), occupancy, centre_cell, o));
+  EXPECT_NEAR(o.x, 0.0f, 1e-4f);
+  EXPECT_NEAR(o.y, 0.0f, 1e-4f);
+  ASSERT_TRUE(refine_by_alignment(t, features_at(1, pts.size()), occupancy, centre_cell, o));
+  EXPECT_FLOAT_EQ(o.x, 0.5f);  // +1 px, clamped to half of the 1-px spacing
+  EXPECT_NEAR(o.y, 0.0f, 1e-3f);
+  EXPECT_FALSE(refine_by_alignment(t, features_at(0, 2), occupancy, centre_cell, o));  // two features match few points
+  EXPECT_EQ(o.x, 0.0f);
+  std::vector<std::uint8_t> short_scratch(tracker_mask_bytes(t) - 1);
+  EXPECT_FALSE(refine_by_alignment(t, features_at(0, pts.size()), short_scratch, centre_cell, o));
 }
 
 }  // namespace

@@ -33,6 +33,9 @@ int track(const std::vector<std::string>& argv) {
              {"--motion-filter", "", "with --plain: predict the ROI, gate candidates, grade confidence (default on)"},
              {"--refine", "", "with --plain: sub-cell x, y, theta from the neighbouring cells' scores (default on)"},
              {"--recover", "", "with --plain: once lost, search around the last confident pose (default on)"},
+             {"--subcell", "parabola|alignment", "how refinement places the pose within the cell: a parabola through the\n"
+              "                          neighbouring cells' scores (default), or a least-squares alignment of the\n"
+              "                          matched features (docs/tracking.md compares them)"},
              {"--coarse", "T", "table for the recovery search (larger cells, wider window): its 8 best cells\n"
                                   "are checked by the table instead of the search grid (implies --recover)"},
              {"--search-budget", "N", "recovery grid placements per search beyond the nearest 9, 1..558 (default: all\n"
@@ -65,6 +68,13 @@ int track(const std::vector<std::string>& argv) {
   options.session = app::session_options(plain, args.has("--motion-filter"), args.has("--refine"),
                                          args.has("--recover") || args.has("--coarse"));
   options.table_focus_stack = !plain && !args.has("--no-focus-stack");
+  if (const std::string subcell = args.get_or("--subcell", "parabola"); subcell == "alignment") {
+    options.session.align_features = true;
+  } else if (subcell != "parabola") {
+    throw app::UsageError("--subcell '" + subcell + "': want parabola or alignment");
+  }
+  if (args.has("--subcell") && !options.session.refine) throw app::UsageError("--subcell needs refinement: drop --plain or add --refine");
+  if (args.has("--subcell") && options.threads > 1) throw app::UsageError("--subcell applies to the session, not --threads");
   options.session.recovery.budget = static_cast<std::uint32_t>(args.integer("--search-budget", 0, 1, 558));
   options.session.recovery.interval = static_cast<std::uint32_t>(args.integer("--search-interval", 1, 1, 100));
   options.session.recovery.screen_stride = static_cast<std::uint32_t>(args.integer("--screen-stride", 2, 1, 16));

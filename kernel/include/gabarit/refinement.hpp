@@ -13,6 +13,7 @@
 #include <cstdint>
 #include <span>
 
+#include "gabarit/roi_point.hpp"
 #include "gabarit/table_view.hpp"
 #include "gabarit/voter.hpp"
 
@@ -26,5 +27,22 @@ struct SubCellOffset {
 
 // Precondition: counters hold this frame's votes (voter_counter_count cells), cell < cell_count.
 SubCellOffset refine_within_cell(const TableView& table, std::span<const VoteCounter> counters, std::uint32_t cell) noexcept;
+
+// The other way: a least-squares alignment of the frame's features to the
+// model. The model points of the cell's depth, placed by the cell's centre
+// (rotated by its angle, translated by its x, y), are each matched to the
+// nearest feature within kAlignRadius pixels; the offset (x, y, theta about
+// the reference point) minimising the matched pairs' squared distances, by
+// two Gauss-Newton steps of the 3x3 normal equations (fixed-size Eigen), is
+// clamped to half a cell spacing like the parabola's. `features` are this
+// frame's (track_step's scratch.features, ROI coordinates); `occupancy` is
+// scratch of at least tracker_mask_bytes(table) bytes, overwritten (the
+// tracker's roi_mask, free once the frame is voted). False, with a zero
+// offset, when fewer than kAlignMinMatches points find a feature, when the
+// scratch is short, or when the pairs do not fix the three unknowns.
+inline constexpr int kAlignRadius = 1;
+inline constexpr std::uint32_t kAlignMinMatches = 8;
+[[nodiscard]] bool refine_by_alignment(const TableView& table, std::span<const RoiPoint> features,
+                                       std::span<std::uint8_t> occupancy, std::uint32_t cell, SubCellOffset& out) noexcept;
 
 }  // namespace gabarit

@@ -18,6 +18,7 @@
 #include "gabarit/depth_by_intensity.hpp"
 #include "gabarit/motion_filter.hpp"
 #include "gabarit/recovery_search.hpp"
+#include "gabarit/refinement.hpp"
 #include "gabarit/tracker.hpp"
 
 namespace gabarit {
@@ -43,9 +44,13 @@ struct SessionOptions {
   // With a focus stack: the depth by intensity replaces the votes' depth
   // only if it correlates better by this much (depth_by_intensity.hpp).
   float depth_switch_correlation = 0.0f;
+  // With refine: the sub-cell offset by a least-squares alignment of the
+  // matched features (refinement.hpp) instead of the parabola through the
+  // neighbouring cells' scores.
+  bool align_features = false;
 };
 // track_step frame after frame, nothing added: the thesis's tracker.
-inline constexpr SessionOptions kPlainSession{false, false, false, {}, {}, false, false, 0.0f, 0.0f};
+inline constexpr SessionOptions kPlainSession{false, false, false, {}, {}, false, false, 0.0f, 0.0f, false};
 
 struct SessionResult {
   Pose pose;                 // the session's estimate after this frame
@@ -89,6 +94,7 @@ class TrackingSession {
   Status measure_at(const ImageView& image, const Pose& centre, SessionScratch scratch, Measurement& m) noexcept;
   bool theta_observable(std::span<const VoteCounter> counters, std::uint32_t cell) const noexcept;
   bool on_translation_border(std::uint32_t cell) const noexcept;
+  SubCellOffset sub_cell(SessionScratch scratch, const StepResult& step, std::uint32_t cell) const noexcept;
   Status track_fine(const ImageView& image, SessionScratch scratch, SessionResult& out) noexcept;
   Status recover(const ImageView& image, SessionScratch scratch, SessionResult& out) noexcept;
   void begin_lost() noexcept;
