@@ -34,7 +34,9 @@ Status TrackingSession::step(const ImageView& image, SessionScratch scratch, Ses
   out = SessionResult{};
   ++last_confident_.frames_since;
   GABARIT_TRY(lost_ ? recover(image, scratch, out) : track_fine(image, scratch, out));
-  if (stack_ != nullptr && out.state != TrackState::kLost) {
+  // Intensities only where there is a measurement to compare at: a frame
+  // without one has no pose worth correlating the stack with.
+  if (stack_ != nullptr && out.state != TrackState::kLost && out.confidence != Confidence::kNone) {
     // Only what the table can tell apart: the depth where it has several,
     // the angle where it rotates.
     if (fine_.depth_count() > 1) {
@@ -181,7 +183,9 @@ Status TrackingSession::track_fine(const ImageView& image, SessionScratch scratc
 
 Status TrackingSession::recover(const ImageView& image, SessionScratch scratch, SessionResult& out) noexcept {
   SearchResult found;
-  GABARIT_TRY(search_.run(image, options_.recovery, last_confident_, pose_.depth, scratch, found));
+  // The depth last seen with confidence: the frames since, unsure, may have
+  // set the pose's depth from clutter.
+  GABARIT_TRY(search_.run(image, options_.recovery, last_confident_, last_confident_.pose.depth, scratch, found));
   out.searched_coarse = found.searched_coarse;
   out.state = TrackState::kLost;
   out.pose = pose_;

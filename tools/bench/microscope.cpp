@@ -91,7 +91,9 @@ Scene make_scene(const std::string& dir, bool quick, std::ostringstream& md) {
   // 2. Tables: the fine table of the tracker, timed.
   const std::vector<std::string> model_paths = scene_model_paths(seq, so.depths);
   for (const std::string& path : model_paths) model_images.push_back(app::read_pgm(path));
-  const host::ModelStack model = host::model_from_images(model_paths, {});
+  host::ImageModelOptions canny;  // gabarit tables build's default detector
+  canny.canny = true;
+  const host::ModelStack model = host::model_from_images(model_paths, canny);
   bo.space.x = host::parse_axis("-4:4:9", "x");
   bo.space.y = host::parse_axis("-4:4:9", "y");
   bo.space.theta = host::parse_axis("-1.5:1.5:7", "theta");
@@ -99,9 +101,9 @@ Scene make_scene(const std::string& dir, bool quick, std::ostringstream& md) {
   sc.table_bytes = host::build_table(model, bo);
   const double build_fine_ms = micros_since(t0) / 1000;
   if (TableView::open(sc.table_bytes, sc.table) != Status::kOk) throw app::Error("microscope: fine table invalid");
-  md << "Fine table (gradient-rows detector unless said): x, y -4..4 px in 1-px cells, theta -1.5..1.5 deg in 0.5-deg cells, " << so.depths << " depths = "
+  md << "Fine table (the Canny variant, `tables build`'s default, unless said): x, y -4..4 px in 1-px cells, theta -1.5..1.5 deg in 0.5-deg cells, " << so.depths << " depths = "
      << sc.table.cell_count() << " cells, " << sc.table.reference_count() << " references, " << sc.table_bytes.size() << " bytes, "
-     << model.depths[0].size() << " model features at depth 0 (gradient detector, threshold " << model.detector.threshold
+     << model.depths[0].size() << " model features at depth 0 (Canny variant, threshold " << model.detector.threshold
      << " from the model), built in " << fmt(build_fine_ms) << " ms.\n\n";
 
   const auto& truth = sc.truth;
@@ -156,13 +158,11 @@ void accuracy_table(const Scene& sc, const std::string& dir, std::ostringstream&
   refine_only.refine = true;
   track("gabarit + sub-cell refinement", refine_only, table);
   track("gabarit + motion filter + refinement + recovery", SessionOptions{}, table);
-  // The same with the Canny variant as detector (model and frames).
-  host::ImageModelOptions canny_options;
-  canny_options.canny = true;
-  const std::vector<std::byte> canny_bytes = host::build_table(host::model_from_images(model_paths, canny_options), bo);
-  TableView canny_table;
-  if (TableView::open(canny_bytes, canny_table) != Status::kOk) throw app::Error("microscope: Canny table invalid");
-  track("the same, Canny variant detector", SessionOptions{}, canny_table);
+  // The same with the thesis's gradient-rows detector (model and frames).
+  const std::vector<std::byte> rows_bytes = host::build_table(host::model_from_images(model_paths, {}), bo);
+  TableView rows_table;
+  if (TableView::open(rows_bytes, rows_table) != Status::kOk) throw app::Error("microscope: gradient-rows table invalid");
+  track("the same, gradient-rows detector (the thesis's)", SessionOptions{}, rows_table);
   // Depth by intensity at the tracked pose (depth_by_intensity.hpp), and the
   // recovery search spread over lost frames (RecoveryOptions::budget).
   track("filter + refinement + recovery + depth and angle by intensity", SessionOptions{}, table, true);
@@ -316,7 +316,9 @@ void other_scenes_table(const Scene& sc, const std::string& dir, std::ostringstr
     const std::vector<std::string> paths = scene_model_paths(other_dir, other.depths);
     host::TrackingOptions options;
     for (const std::string& path : paths) options.focus_stack.push_back(app::read_pgm(path));
-    const std::vector<std::byte> bytes = host::build_table(host::model_from_images(paths, {}), bo);
+    host::ImageModelOptions canny_seed;
+    canny_seed.canny = true;
+    const std::vector<std::byte> bytes = host::build_table(host::model_from_images(paths, canny_seed), bo);
     TableView other_table;
     if (TableView::open(bytes, other_table) != Status::kOk) throw app::Error("microscope: table for seed " + std::to_string(seed) + " invalid");
     const Pose start{static_cast<float>(other_truth[0].x), static_cast<float>(other_truth[0].y),

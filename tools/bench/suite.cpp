@@ -33,6 +33,7 @@ struct Measure {
   double within_1px = 0, within_2px = 0, within_1deg = 0;  // % of visible frames
   double depth = -1;            // % depth exact; -1: one depth, or depths not distinguishable
   int reacquired = 0;           // worst frames to reacquire after an occlusion (-1: never)
+  int reacquired_in_reach = 0;  // the same over occlusions the recovery search can reach (-2: none)
   double mean_us = 0, p99_us = 0;
 };
 
@@ -45,8 +46,50 @@ struct SceneResult {
 
 const char* const kMethods[] = {"plain loop (thesis)", "gabarit default session", "OpenCV NCC bank"};
 
+// For each return to visibility after hidden frames (in order, as
+// Accuracy::reacquired_after): whether the target reappears where the
+// recovery grid reaches (recovery_search.hpp: the table's x, y and theta
+// range around each of the grid's positions and turns) from either of its
+// centres, where the target was last seen and where it would be had it kept
+// its velocity then (taken here from the truth). Beyond is the detection
+// issue's.
+std::vector<bool> occlusions_in_reach(const std::vector<host::PoseSample>& truth, const TableView& table) {
+  const RecoveryOptions recovery;
+  const Axis ax = table.axis_x(), ay = table.axis_y(), at = table.axis_theta();
+  const double reach_x = kSearchRings * search_step(ax) + ax.max, reach_y = kSearchRings * search_step(ay) + ay.max;
+  const double reach_theta = kSearchTurns * recovery.turn_deg + at.max;
+  const auto within = [&](const host::PoseSample& t, double x, double y, double theta) {
+    return std::fabs(t.x - x) <= reach_x && std::fabs(t.y - y) <= reach_y && std::fabs(t.theta_deg - theta) <= reach_theta;
+  };
+  std::vector<bool> out;
+  const host::PoseSample *last_seen = nullptr, *before = nullptr;
+  bool hidden = false;
+  for (const host::PoseSample& t : truth) {
+    if (!t.visible) {
+      hidden = true;
+      continue;
+    }
+    if (hidden) {
+      bool reach = false;
+      if (last_seen != nullptr) {
+        reach = within(t, last_seen->x, last_seen->y, last_seen->theta_deg);
+        if (before != nullptr) {
+          const double n = static_cast<double>(t.frame) - last_seen->frame;
+          reach = reach || within(t, last_seen->x + n * (last_seen->x - before->x), last_seen->y + n * (last_seen->y - before->y),
+                                  last_seen->theta_deg + n * (last_seen->theta_deg - before->theta_deg));
+        }
+      }
+      out.push_back(reach);
+    }
+    hidden = false;
+    before = last_seen;
+    last_seen = &t;
+  }
+  return out;
+}
+
 Measure measure(const std::vector<host::PoseSample>& poses, const std::vector<host::PoseSample>& truth, std::vector<double> micros,
-                bool depth_counts) {
+                bool depth_counts, const std::vector<bool>& in_reach) {
   const host::Accuracy a = host::evaluate(poses, truth);
   Measure m;
   const double n = a.frames ? static_cast<double>(a.frames) : 1.0;
@@ -55,6 +98,12 @@ Measure measure(const std::vector<host::PoseSample>& poses, const std::vector<ho
   m.within_1deg = 100.0 * static_cast<double>(a.within_1deg) / n;
   if (depth_counts) m.depth = 100.0 * static_cast<double>(a.depth_exact) / n;
   for (int r : a.reacquired_after) m.reacquired = (r < 0 || m.reacquired < 0) ? -1 : std::max(m.reacquired, r);
+  m.reacquired_in_reach = -2;
+  for (std::size_t i = 0; i < a.reacquired_after.size() && i < in_reach.size(); ++i) {
+    if (!in_reach[i]) continue;
+    const int r = a.reacquired_after[i];
+    m.reacquired_in_reach = (r < 0 || m.reacquired_in_reach == -1) ? -1 : std::max(m.reacquired_in_reach, r);
+  }
   const host::TimingSummary t = host::summarise_timing(std::move(micros));
   m.mean_us = t.mean;
   m.p99_us = t.p99;
@@ -88,6 +137,7 @@ SceneResult run_scene(std::uint32_t index, std::uint32_t frames_per_scene, const
   const Pose init{static_cast<float>(truth[0].x), static_cast<float>(truth[0].y), static_cast<float>(truth[0].theta_deg),
                   static_cast<std::uint16_t>(truth[0].depth)};
   const bool depth_counts = so.depths > 1 && so.stack == host::FocusStackKind::kTilted;
+  const std::vector<bool> in_reach = occlusions_in_reach(truth, table);
 
   SceneResult out;
   out.index = index;
@@ -105,7 +155,7 @@ SceneResult run_scene(std::uint32_t index, std::uint32_t frames_per_scene, const
       poses.push_back({row.frame, row.step.pose.x, row.step.pose.y, row.step.pose.theta_deg, row.step.pose.depth, true});
       micros.push_back(row.micros);
     });
-    out.methods.push_back(measure(poses, truth, micros, depth_counts));
+    out.methods.push_back(measure(poses, truth, micros, depth_counts, in_reach));
   }
   if (peer) {
     NccBank ncc(models, 5, 0.5, 3);
@@ -118,7 +168,7 @@ SceneResult run_scene(std::uint32_t index, std::uint32_t frames_per_scene, const
       micros.push_back(std::chrono::duration<double, std::micro>(Clock::now() - t).count());
       poses.push_back({f, pose.x, pose.y, pose.theta_deg, pose.depth, true});
     }
-    out.methods.push_back(measure(poses, truth, micros, depth_counts));
+    out.methods.push_back(measure(poses, truth, micros, depth_counts, in_reach));
   }
   return out;
 }
@@ -130,7 +180,7 @@ double median(std::vector<double> v) {
   return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
-std::string reacq(int r) { return r < 0 ? "never" : std::to_string(r); }
+std::string reacq(int r) { return r == -2 ? "-" : r < 0 ? "never" : std::to_string(r); }
 
 // Median and worst over the scenes of one half, per method.
 void summary_table(const std::vector<SceneResult>& scenes, const std::string& title, std::ostringstream& md) {
@@ -138,17 +188,19 @@ void summary_table(const std::vector<SceneResult>& scenes, const std::string& ti
   const std::size_t methods = scenes[0].methods.size();
   md << "### " << title << " (" << scenes.size() << " scenes)\n\n"
      << "| method | within 1 px: median | worst | 2 px: median | worst | 1 deg: median | worst | depth exact: median | worst "
-        "| reacquired: worst | us/frame: mean | p99 (median over scenes) | p99 / median |\n"
-     << "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+        "| reacquired: worst | in reach: worst | us/frame: mean | p99 (median over scenes) | p99 / median |\n"
+     << "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
   for (std::size_t m = 0; m < methods; ++m) {
     std::vector<double> px1, px2, deg, depth, mean_us, p99;
-    int worst_reacq = 0;
+    int worst_reacq = 0, worst_in_reach = -2;
     for (const SceneResult& s : scenes) {
       const Measure& r = s.methods[m];
       px1.push_back(r.within_1px), px2.push_back(r.within_2px), deg.push_back(r.within_1deg);
       if (r.depth >= 0) depth.push_back(r.depth);
       mean_us.push_back(r.mean_us), p99.push_back(r.p99_us);
       worst_reacq = (r.reacquired < 0 || worst_reacq < 0) ? -1 : std::max(worst_reacq, r.reacquired);
+      if (r.reacquired_in_reach != -2)
+        worst_in_reach = (r.reacquired_in_reach == -1 || worst_in_reach == -1) ? -1 : std::max(worst_in_reach, r.reacquired_in_reach);
     }
     const auto worst = [](const std::vector<double>& v) { return v.empty() ? 0.0 : *std::min_element(v.begin(), v.end()); };
     double mean_all = 0;
@@ -156,7 +208,7 @@ void summary_table(const std::vector<SceneResult>& scenes, const std::string& ti
     md << "| " << kMethods[m] << " | " << fmt(median(px1)) << "% | " << fmt(worst(px1)) << "% | " << fmt(median(px2)) << "% | "
        << fmt(worst(px2)) << "% | " << fmt(median(deg)) << "% | " << fmt(worst(deg)) << "% | "
        << (depth.empty() ? "-" : fmt(median(depth)) + "%") << " | " << (depth.empty() ? "-" : fmt(worst(depth)) + "%") << " | "
-       << reacq(worst_reacq) << " | " << fmt(mean_all) << " | " << fmt(median(p99)) << " | "
+       << reacq(worst_reacq) << " | " << reacq(worst_in_reach) << " | " << fmt(mean_all) << " | " << fmt(median(p99)) << " | "
        << fmt(median(p99) / std::max(1e-9, median(mean_us))) << " |\n";
   }
   // The promise: the default session never worse than the plain loop.
@@ -172,9 +224,16 @@ void summary_table(const std::vector<SceneResult>& scenes, const std::string& ti
       if (gap < worst_gap) worst_gap = gap, worst_scene = s.name, worst_metric = metric;
     better_median += d.within_1px >= p.within_1px;
   }
+  std::size_t in_reach = 0, within_10 = 0;
+  for (const SceneResult& sr : scenes) {
+    if (sr.methods[1].reacquired_in_reach == -2) continue;
+    ++in_reach;
+    within_10 += sr.methods[1].reacquired_in_reach >= 0 && sr.methods[1].reacquired_in_reach <= 10;
+  }
   md << "\nDefault session minus plain loop, the worst scene and metric: " << fmt(worst_gap) << " points (" << worst_metric << ", "
      << worst_scene << "); the session is at least as good within 1 px on " << better_median << " of " << scenes.size()
-     << " scenes.";
+     << " scenes; it reacquires within 10 frames on " << within_10 << " of the " << in_reach
+     << " scenes whose occlusion ends within the recovery search's reach.";
   if (methods > 2) {
     double ncc = 0, session = 0;
     for (const SceneResult& s : scenes) ncc += s.methods[2].mean_us, session += s.methods[1].mean_us;
@@ -194,7 +253,7 @@ int run_suite(const SuiteOptions& o) {
   const auto start = Clock::now();
   std::vector<SceneResult> results;
   std::ostringstream csv;
-  csv << "index,name,half,method,within_1px,within_2px,within_1deg,depth_exact,reacquired_after,mean_us,p99_us\n";
+  csv << "index,name,half,method,within_1px,within_2px,within_1deg,depth_exact,reacquired_after,reacquired_in_reach,mean_us,p99_us\n";
   for (std::uint32_t i = 0; i < scenes; ++i) {
     std::fprintf(stderr, "\rsuite: scene %u/%u", i + 1, scenes);
     results.push_back(run_scene(i, frames, dir, o.peer));
@@ -203,7 +262,7 @@ int run_suite(const SuiteOptions& o) {
       const Measure& x = r.methods[m];
       csv << r.index << "," << r.name << "," << (r.held_out ? "held-out" : "tuning") << "," << kMethods[m] << "," << fmt(x.within_1px)
           << "," << fmt(x.within_2px) << "," << fmt(x.within_1deg) << "," << (x.depth < 0 ? "" : fmt(x.depth)) << ","
-          << x.reacquired << "," << fmt(x.mean_us) << "," << fmt(x.p99_us) << "\n";
+          << x.reacquired << "," << x.reacquired_in_reach << "," << fmt(x.mean_us) << "," << fmt(x.p99_us) << "\n";
     }
   }
   std::fprintf(stderr, "\n");
@@ -212,20 +271,22 @@ int run_suite(const SuiteOptions& o) {
      << " frames (`gabarit synth --suite`, docs/scene-suite.md), each tracked from its first true pose with its own table "
         "(Canny detector, model images stored, x and y -5..5 px in 1-px cells, theta -1.5..1.5 deg in 0.5-deg cells, every depth). "
         "Accuracy over the visible frames; depth only on tilted stacks (distinguishable depths); 'reacquired' is the "
-        "worst number of frames after an occlusion until the pose is within 2 px again. One thread.\n\n";
+        "worst number of frames after an occlusion until the pose is within 2 px again ('in reach': over the occlusions "
+        "after which the target reappears within the recovery grid's reach of where it was last seen; '-': none). One thread.\n\n";
   std::vector<SceneResult> tuning, held_out;
   for (const SceneResult& r : results) (r.held_out ? held_out : tuning).push_back(r);
   md << "## Summary\n\n";
   summary_table(held_out, "Held-out half (never tuned on)", md);
   summary_table(tuning, "Tuning half", md);
-  md << "## Per scene\n\n| # | scene | half | method | 1 px | 2 px | 1 deg | depth | reacquired | us/frame mean | p99 |\n"
-        "|---:|---|---|---|---:|---:|---:|---:|---:|---:|---:|\n";
+  md << "## Per scene\n\n| # | scene | half | method | 1 px | 2 px | 1 deg | depth | reacquired | in reach | us/frame mean | p99 |\n"
+        "|---:|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|\n";
   for (const SceneResult& r : results)
     for (std::size_t m = 0; m < r.methods.size(); ++m) {
       const Measure& x = r.methods[m];
       md << "| " << r.index << " | " << r.name << " | " << (r.held_out ? "held-out" : "tuning") << " | " << kMethods[m] << " | "
          << fmt(x.within_1px) << " | " << fmt(x.within_2px) << " | " << fmt(x.within_1deg) << " | "
-         << (x.depth < 0 ? "-" : fmt(x.depth)) << " | " << reacq(x.reacquired) << " | " << fmt(x.mean_us) << " | " << fmt(x.p99_us)
+         << (x.depth < 0 ? "-" : fmt(x.depth)) << " | " << reacq(x.reacquired) << " | " << reacq(x.reacquired_in_reach) << " | "
+         << fmt(x.mean_us) << " | " << fmt(x.p99_us)
          << " |\n";
     }
   md << "\nWhole run: " << fmt(std::chrono::duration<double>(Clock::now() - start).count()) << " s.\n";
