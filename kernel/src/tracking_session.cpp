@@ -12,7 +12,8 @@ TrackState state_of(Confidence c) noexcept { return c == Confidence::kHigh ? Tra
 Status TrackingSession::start(const SessionOptions& options, const Pose& initial) noexcept {
   if (!valid(options.filter) || !valid(options.recovery) || !pose_in_range(initial) || initial.depth >= fine_.depth_count() ||
       !(options.theta_observability >= 0.0f && options.theta_observability <= 1.0f) ||
-      !(options.depth_switch_correlation >= 0.0f && options.depth_switch_correlation <= 2.0f)) {
+      !(options.depth_switch_correlation >= 0.0f && options.depth_switch_correlation <= 2.0f) ||
+      !(options.depth_votes_decisive >= 0.0f)) {
     return Status::kInvalidArgument;
   }
   if (coarse_ != nullptr && coarse_->depth_count() != fine_.depth_count()) return Status::kInvalidArgument;
@@ -32,6 +33,7 @@ void TrackingSession::begin_lost() noexcept {
 
 Status TrackingSession::step(const ImageView& image, SessionScratch scratch, SessionResult& out) noexcept {
   out = SessionResult{};
+  depth_margin_ = 0.0f;
   ++last_confident_.frames_since;
   GABARIT_TRY(lost_ ? recover(image, scratch, out) : track_fine(image, scratch, out));
   // Intensities only where there is a measurement to compare at: a frame
@@ -39,7 +41,9 @@ Status TrackingSession::step(const ImageView& image, SessionScratch scratch, Ses
   if (stack_ != nullptr && out.state != TrackState::kLost && out.confidence != Confidence::kNone) {
     // Only what the table can tell apart: the depth where it has several,
     // the angle where it rotates.
-    if (fine_.depth_count() > 1) {
+    // Where the votes chose the depth clearly, they keep it; else the
+    // intensities choose (edge features change little with focus).
+    if (fine_.depth_count() > 1 && !(depth_margin_ >= options_.depth_votes_decisive)) {
       GABARIT_TRY(depth_by_intensity(image, pose_, *stack_, pose_.depth, options_.depth_switch_correlation));
     }
     out.pose = pose_;
@@ -108,6 +112,18 @@ Status TrackingSession::measure_at(const ImageView& image, const Pose& centre, S
   // Where the votes barely tell the angles apart (a near-symmetric outline)
   // the angle is the cell's, as in the plain loop: no sub-cell offset.
   m.pose = pose_of_cell(fine_, choice.cell.cell, centre, m.step.roi_centre_x, m.step.roi_centre_y, o.x, o.y, o.theta_deg);
+  // How clearly the votes chose the depth: the chosen cell's score over the
+  // best of any other depth.
+  m.depth_margin = 0.0f;
+  if (fine_.depth_count() > 1) {
+    float other = 0.0f;
+    for (std::uint16_t d = 0; d < fine_.depth_count(); ++d) {
+      if (d == m.pose.depth) continue;
+      const float sd = normalised_score(best_cell_in(fine_, scratch.fine.counters, fine_.depth_cells(d)));
+      other = sd > other ? sd : other;
+    }
+    m.depth_margin = other > 0.0f ? m.score / other - 1.0f : 1.0f;
+  }
   return Status::kOk;
 }
 
@@ -155,6 +171,7 @@ Status TrackingSession::track_fine(const ImageView& image, SessionScratch scratc
   }
   out.step = m.step;
   out.score = m.score;
+  depth_margin_ = m.depth_margin;
   const Confidence confidence = m.confidence;
   if (confidence != Confidence::kNone) static_cast<void>(filter_.grade(m.score, m.next_score));  // moves the reference score
   if (confidence != Confidence::kNone) {

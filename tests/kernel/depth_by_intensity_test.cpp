@@ -75,6 +75,23 @@ TEST(DepthByIntensity, SparseSamplingStillChoosesIt) {
   EXPECT_EQ(depth, 2);
 }
 
+// Hysteresis: the current depth stays unless another correlates better by
+// the margin. Image 2 pasted, with image 1 as the current depth: a margin of
+// 0 switches to 2, a margin of 2 (the score's whole range) never does.
+TEST(DepthByIntensity, ASwitchMarginKeepsTheCurrentDepth) {
+  const auto stack = make_stack();
+  const Views v(stack);
+  const FocusStack fs{v.views, 20.0f, 20.0f, 1};
+  const GrayImage f = frame_with(stack[2], 60.0f, 48.0f, 0.0f);
+  std::uint16_t depth = 1;
+  ASSERT_EQ(depth_by_intensity(f.view(), Pose{60.0f, 48.0f, 0.0f, 1}, fs, depth, 0.0f), Status::kOk);
+  EXPECT_EQ(depth, 2);
+  depth = 1;
+  ASSERT_EQ(depth_by_intensity(f.view(), Pose{60.0f, 48.0f, 0.0f, 1}, fs, depth, 2.0f), Status::kOk);
+  EXPECT_EQ(depth, 1);
+  EXPECT_EQ(depth_by_intensity(f.view(), Pose{60.0f, 48.0f, 0.0f, 1}, fs, depth, -0.5f), Status::kInvalidArgument);
+}
+
 TEST(DepthByIntensity, OutsideTheFrameLeavesTheDepthAlone) {
   const auto stack = make_stack();
   const Views v(stack);

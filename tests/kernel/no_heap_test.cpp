@@ -185,6 +185,16 @@ int main() {
     SessionResult r;
     return with_stack.start(SessionOptions{}, Pose{32, 32, 0, 0}) == Status::kOk && with_stack.step(view, {scratch, {}}, r) == Status::kOk;
   });
-  std::printf("%d passed, %d failed\n", 14 - failures, failures);
+  // Refinement by aligning the features (fixed-size Eigen) in a session.
+  expect_no_allocation("tracking session, sub-cell by feature alignment", [&] {
+    TrackingSession aligned(table, nullptr, detector_of(table));
+    SessionOptions o;
+    o.align_features = true;
+    SessionResult r;
+    bool ok = aligned.start(o, Pose{32, 32, 0, 0}) == Status::kOk;
+    for (int i = 0; i < 3 && ok; ++i) ok = aligned.step(view, {scratch, {}}, r) == Status::kOk;
+    return ok;
+  });
+  std::printf("%d passed, %d failed\n", 15 - failures, failures);
   return failures == 0 ? 0 : 1;
 }

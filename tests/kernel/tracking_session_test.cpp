@@ -70,7 +70,9 @@ TEST(TrackingSession, BadOptionsAreRefused) {
                                 +[](SessionOptions& b) { b.recovery.coarse_proposals = 0; },
                                 +[](SessionOptions& b) { b.recovery.coarse_proposals = kMaxCoarseProposals + 1; },
                                 +[](SessionOptions& b) { b.theta_observability = -0.1f; },
-                                +[](SessionOptions& b) { b.filter.accel_var = 0.0f; }}) {
+                                +[](SessionOptions& b) { b.filter.accel_var = 0.0f; },
+                                +[](SessionOptions& b) { b.depth_votes_decisive = -1.0f; },
+                                +[](SessionOptions& b) { b.depth_switch_correlation = 3.0f; }}) {
     SessionOptions b;
     bad_option(b);
     EXPECT_EQ(session.start(b, Pose{10, 10, 0, 0}), Status::kInvalidArgument);
