@@ -62,7 +62,7 @@ bool refine_by_alignment(const TableView& table, std::span<const RoiPoint> featu
   const auto feature_at = [&](std::int32_t col, std::int32_t row) {
     if (col < 0 || row < 0 || col >= static_cast<std::int32_t>(w) || row >= static_cast<std::int32_t>(h)) return false;
     const std::size_t at = static_cast<std::size_t>(row) * w + static_cast<std::size_t>(col);
-    return ((occupancy[at >> 3] >> (at & 7u)) & 1u) != 0;
+    return ((static_cast<unsigned>(occupancy[at >> 3]) >> (at & 7u)) & 1u) != 0;
   };
   const CellBounds c = table.cell(cell);
   const std::uint16_t depth = c.depth;
