@@ -7,13 +7,26 @@ namespace {
 
 TrackState state_of(Confidence c) noexcept { return c == Confidence::kHigh ? TrackState::kTracking : TrackState::kUncertain; }
 
+// What a score says above clutter: a stencil laid over pixels that are
+// features with probability d (this frame's features per ROI pixel) collects
+// about d of its size by chance, so (s - d) / (1 - d), at least 0, is what
+// the target adds. Binary frames with 46% of their pixels flipped score 0.46
+// anywhere, close to the target's 0.54: there a cell is confident only if it
+// stands above clutter as the reference does.
+float contrast(float score, const StepResult& step, const TableView& table) noexcept {
+  const float d = static_cast<float>(step.features) / static_cast<float>(table.roi_pixels());
+  if (!(d < 1.0f)) return 0.0f;
+  const float c = (score - d) / (1.0f - d);
+  return c > 0.0f ? c : 0.0f;
+}
+
 }  // namespace
 
 Status TrackingSession::start(const SessionOptions& options, const Pose& initial) noexcept {
   if (!valid(options.filter) || !valid(options.recovery) || !pose_in_range(initial) || initial.depth >= fine_.depth_count() ||
       !(options.theta_observability >= 0.0f && options.theta_observability <= 1.0f) ||
       !(options.depth_switch_correlation >= 0.0f && options.depth_switch_correlation <= 2.0f) ||
-      !(options.depth_votes_decisive >= 0.0f)) {
+      !(options.depth_votes_decisive >= 0.0f) || !(options.clutter_floor >= 0.0f && options.clutter_floor <= 1.0f)) {
     return Status::kInvalidArgument;
   }
   if (coarse_ != nullptr && coarse_->depth_count() != fine_.depth_count()) return Status::kInvalidArgument;
@@ -58,6 +71,19 @@ Status TrackingSession::step(const ImageView& image, SessionScratch scratch, Ses
 
 // A best cell on the edge of the table's x or y range may be the foot of a
 // peak that lies outside the window (the prediction missed): not confident.
+// The confidence ratios (none below low_ratio of the reference score) tell
+// the target from chance only while chance scores below that: d, this
+// frame's features per ROI pixel, is what a stencil collects by chance. Where
+// d reaches low_ratio of the reference (binary frames in heavy noise), a
+// measurement must also stand above chance, (s - d) / (1 - d), at least
+// clutter_floor as high as the reference does. Below, nothing changes.
+bool TrackingSession::clutter_rejects(float score, const StepResult& step) const noexcept {
+  const float d = static_cast<float>(step.features) / static_cast<float>(fine_.roi_pixels());
+  const float reference = filter_.reference();
+  if (!(d >= options_.filter.low_ratio * reference)) return false;
+  return contrast(score, step, fine_) < options_.clutter_floor * contrast(reference, step, fine_);
+}
+
 bool TrackingSession::on_translation_border(std::uint32_t cell) const noexcept {
   const Axis ax = fine_.axis_x(), ay = fine_.axis_y();
   const std::uint32_t ix = cell % ax.cells, iy = (cell / ax.cells) % ay.cells;
@@ -99,9 +125,12 @@ Status TrackingSession::measure_at(const ImageView& image, const Pose& centre, S
   GatedChoice choice;
   GABARIT_TRY(filter_.choose(fine_, scratch.fine.counters, centre, m.step.roi_centre_x, m.step.roi_centre_y, pose_.depth, choice));
   if (!choice.found) return Status::kOk;
-  m.score = choice.score;
+  m.score = m.raw_score = choice.score;
   m.next_score = choice.next_score;
-  m.confidence = filter_.classify(choice.score, choice.next_score);
+  m.confidence = filter_.classify(m.score, m.next_score);
+  // Not confident where the cell stands little above what clutter gives by
+  // chance, compared with the reference score's standing.
+  if (clutter_rejects(choice.score, m.step)) m.confidence = Confidence::kNone;
   if ((choice.outranked || on_translation_border(choice.cell.cell)) && m.confidence == Confidence::kHigh)
     m.confidence = Confidence::kIntermediate;
   if (m.confidence == Confidence::kNone) return Status::kOk;
@@ -122,7 +151,7 @@ Status TrackingSession::measure_at(const ImageView& image, const Pose& centre, S
       const float sd = normalised_score(best_cell_in(fine_, scratch.fine.counters, fine_.depth_cells(d)));
       other = sd > other ? sd : other;
     }
-    m.depth_margin = other > 0.0f ? m.score / other - 1.0f : 1.0f;
+    m.depth_margin = other > 0.0f ? choice.score / other - 1.0f : 1.0f;
   }
   return Status::kOk;
 }
@@ -170,7 +199,7 @@ Status TrackingSession::track_fine(const ImageView& image, SessionScratch scratc
     if (better(at_last, m)) m = at_last;
   }
   out.step = m.step;
-  out.score = m.score;
+  out.score = m.raw_score;
   depth_margin_ = m.depth_margin;
   const Confidence confidence = m.confidence;
   if (confidence != Confidence::kNone) static_cast<void>(filter_.grade(m.score, m.next_score));  // moves the reference score
@@ -210,7 +239,8 @@ Status TrackingSession::recover(const ImageView& image, SessionScratch scratch, 
   out.step = found.vote;
   out.score = out.step.score;
   const bool confident = out.step.best.votes > 0 &&
-                         filter_.classify(out.score, normalised_score(out.step.runner_up)) == Confidence::kHigh;
+                         filter_.classify(out.score, normalised_score(out.step.runner_up)) == Confidence::kHigh &&
+                         !clutter_rejects(out.score, out.step);
   out.confidence = confident ? Confidence::kHigh : Confidence::kNone;
   if (confident) {
     SubCellOffset o;

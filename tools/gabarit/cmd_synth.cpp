@@ -104,7 +104,9 @@ int synth(const std::vector<std::string>& argv) {
               "                          gravel), cog, coin, horse, pipette, cat, astronaut, cup, large"},
              {"--background", "NAME", "--scene: gravel (default), grass, brick, moon, page, smooth"},
              {"--motion", "NAME", "--scene: smooth (default), walk (velocity random walk, reversing at the margins),\n"
-              "                          stopgo, spin (~1.2 deg/frame), sweep (depth steps every 6 frames)"},
+              "                          stopgo, spin (~1.2 deg/frame), sweep (depth steps every 6 frames);\n"
+              "                          --shape: steps (default: independent steps of +-PX) or walk (a velocity\n"
+              "                          random walk within +-PX that reverses at the margins)"},
              {"--occlusion-side", "SIDE", "--scene: cover (default: all at once), left, right, top, bottom (sliding in), none"},
              {"--stack", "KIND", "--scene: tilted (default: no two depths alike) or alike (two middle depths nearly equal)"},
              {"--suite", "", "the scene suite (fixed scenes; --frames and --scenes apply)"},
@@ -124,7 +126,7 @@ int synth(const std::vector<std::string>& argv) {
   if (args.has("--scenes") && !args.has("--suite")) throw app::UsageError("--scenes applies to --suite");
   if (args.has("--suite")) return synth_suite(args);
   if (args.has("--scene")) return synth_scene(args);
-  for (const char* scene_only : {"--depths", "--occlusion", "--background", "--motion", "--occlusion-side", "--stack"})
+  for (const char* scene_only : {"--depths", "--occlusion", "--background", "--occlusion-side", "--stack"})
     if (args.has(scene_only)) throw app::UsageError(std::string(scene_only) + " applies to --scene");
   host::SynthOptions o;
   o.seed = static_cast<std::uint64_t>(args.integer("--seed", 1, 0, INT64_MAX));
@@ -140,6 +142,10 @@ int synth(const std::vector<std::string>& argv) {
                                 o.seed);
   o.frames = static_cast<std::uint32_t>(args.integer("--frames", 100, 1, 1000000));
   o.max_step = static_cast<std::int32_t>(args.integer("--max-step", 4, 0, 1000));
+  if (args.has("--motion")) {
+    if (args.get("--motion") == "walk") o.velocity_walk = true;
+    else if (args.get("--motion") != "steps") throw app::UsageError("--motion '" + args.get("--motion") + "' with --shape: want steps or walk");
+  }
   o.noise = args.number("--noise", 0.0, 0.0, 1.0);
   if (args.has("--size")) {
     const app::FrameSize size = app::parse_size(args.get("--size"), "--size", 8, 8192);

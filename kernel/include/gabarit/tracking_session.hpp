@@ -53,9 +53,16 @@ struct SessionOptions {
   // not asked (1e38: always asked). 0.15 was chosen on the scene suite's
   // tuning half (docs/tracking.md).
   float depth_votes_decisive = 0.15f;
+  // With the motion filter, where chance alone (d, this frame's features per
+  // ROI pixel) scores at least low_ratio of the reference: a measurement is
+  // not confident if its score stands above chance, (s - d) / (1 - d), by less
+  // than this fraction of the reference score's standing (0: off). Binary
+  // frames in heavy noise, where noise alone scores nearly what the target
+  // does (tracking_session.cpp).
+  float clutter_floor = 0.5f;
 };
 // track_step frame after frame, nothing added: the thesis's tracker.
-inline constexpr SessionOptions kPlainSession{false, false, false, {}, {}, false, false, 0.0f, 0.0f, false, 1.0e38f};
+inline constexpr SessionOptions kPlainSession{false, false, false, {}, {}, false, false, 0.0f, 0.0f, false, 1.0e38f, 0.0f};
 
 struct SessionResult {
   Pose pose;                 // the session's estimate after this frame
@@ -90,7 +97,8 @@ class TrackingSession {
   struct Measurement {
     StepResult step;
     Confidence confidence = Confidence::kNone;
-    float score = 0.0f, next_score = 0.0f;
+    float score = 0.0f, next_score = 0.0f;  // normalised scores of the chosen cell and the next candidate
+    float raw_score = 0.0f;                 // votes / stencil size
     Pose pose;                     // the chosen cell's pose, refined
     bool theta_observable = true;
     float depth_margin = 0.0f;     // the chosen cell's score over the best other depth's, minus 1
@@ -100,6 +108,7 @@ class TrackingSession {
   Status measure_at(const ImageView& image, const Pose& centre, SessionScratch scratch, Measurement& m) noexcept;
   bool theta_observable(std::span<const VoteCounter> counters, std::uint32_t cell) const noexcept;
   bool on_translation_border(std::uint32_t cell) const noexcept;
+  bool clutter_rejects(float score, const StepResult& step) const noexcept;
   SubCellOffset sub_cell(SessionScratch scratch, const StepResult& step, std::uint32_t cell) const noexcept;
   Status track_fine(const ImageView& image, SessionScratch scratch, SessionResult& out) noexcept;
   Status recover(const ImageView& image, SessionScratch scratch, SessionResult& out) noexcept;

@@ -102,8 +102,18 @@ std::vector<TruthRow> write_synthetic_sequence(const SynthOptions& o, const std:
   std::int32_t x = static_cast<std::int32_t>(std::clamp<std::int64_t>(o.width / 2, lo_x, hi_x));
   std::int32_t y = static_cast<std::int32_t>(std::clamp<std::int64_t>(o.height / 2, lo_y, hi_y));
   std::vector<TruthRow> truth;
+  std::int32_t vx = 0, vy = 0;  // velocity_walk's
   for (std::uint32_t f = 0; f < o.frames; ++f) {
-    if (f > 0) {
+    if (f > 0 && o.velocity_walk) {
+      // The velocity takes a step of -1, 0 or +1 px per axis, within
+      // +-max_step, and reverses where the shape would leave the image.
+      vx = std::clamp(vx + motion.uniform_int(-1, 1), -o.max_step, o.max_step);
+      vy = std::clamp(vy + motion.uniform_int(-1, 1), -o.max_step, o.max_step);
+      if (x + vx < lo_x || x + vx > hi_x) vx = -vx;
+      if (y + vy < lo_y || y + vy > hi_y) vy = -vy;
+      x = static_cast<std::int32_t>(std::clamp<std::int64_t>(x + vx, lo_x, hi_x));
+      y = static_cast<std::int32_t>(std::clamp<std::int64_t>(y + vy, lo_y, hi_y));
+    } else if (f > 0) {
       // Redraw a step that leaves the image (bounded tries), then clamp.
       std::int32_t nx = x, ny = y;
       for (int attempt = 0; attempt < 64; ++attempt) {

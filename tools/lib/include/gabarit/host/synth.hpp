@@ -22,6 +22,10 @@ struct SynthOptions {
   std::vector<Point> shape;  // relative to the reference point
   std::uint32_t frames = 100;
   std::int32_t max_step = 4;
+  // Instead of independent steps: a velocity random walk (each frame the
+  // velocity changes by -1, 0 or +1 px per axis, |v| <= max_step) that
+  // reverses at the image margins.
+  bool velocity_walk = false;
   double noise = 0.0;
   std::uint64_t seed = 1;
   std::uint32_t width = 256;
