@@ -7,12 +7,10 @@ namespace {
 
 TrackState state_of(Confidence c) noexcept { return c == Confidence::kHigh ? TrackState::kTracking : TrackState::kUncertain; }
 
-// What a score says above clutter: a stencil laid over pixels that are
+// How far a score stands above chance: a stencil laid over pixels that are
 // features with probability d (this frame's features per ROI pixel) collects
 // about d of its size by chance, so (s - d) / (1 - d), at least 0, is what
-// the target adds. Binary frames with 46% of their pixels flipped score 0.46
-// anywhere, close to the target's 0.54: there a cell is confident only if it
-// stands above clutter as the reference does.
+// the target adds (TrackingSession::clutter_rejects).
 float contrast(float score, const StepResult& step, const TableView& table) noexcept {
   const float d = static_cast<float>(step.features) / static_cast<float>(table.roi_pixels());
   if (!(d < 1.0f)) return 0.0f;
@@ -52,10 +50,9 @@ Status TrackingSession::step(const ImageView& image, SessionScratch scratch, Ses
   // Intensities only where there is a measurement to compare at: a frame
   // without one has no pose worth correlating the stack with.
   if (stack_ != nullptr && out.state != TrackState::kLost && out.confidence != Confidence::kNone) {
-    // Only what the table can tell apart: the depth where it has several,
-    // the angle where it rotates.
-    // Where the votes chose the depth clearly, they keep it; else the
-    // intensities choose (edge features change little with focus).
+    // Only what the table can tell apart: the depth where it has several
+    // and the votes did not choose it clearly themselves (edge features
+    // change little with focus), the angle where it rotates.
     if (fine_.depth_count() > 1 && !(depth_margin_ >= options_.depth_votes_decisive)) {
       GABARIT_TRY(depth_by_intensity(image, pose_, *stack_, pose_.depth, options_.depth_switch_correlation));
     }
@@ -69,8 +66,6 @@ Status TrackingSession::step(const ImageView& image, SessionScratch scratch, Ses
   return Status::kOk;
 }
 
-// A best cell on the edge of the table's x or y range may be the foot of a
-// peak that lies outside the window (the prediction missed): not confident.
 // The confidence ratios (none below low_ratio of the reference score) tell
 // the target from chance only while chance scores below that: d, this
 // frame's features per ROI pixel, is what a stencil collects by chance. Where
@@ -84,6 +79,8 @@ bool TrackingSession::clutter_rejects(float score, const StepResult& step) const
   return contrast(score, step, fine_) < options_.clutter_floor * contrast(reference, step, fine_);
 }
 
+// A best cell on the edge of the table's x or y range may be the foot of a
+// peak that lies outside the window (the prediction missed): not confident.
 bool TrackingSession::on_translation_border(std::uint32_t cell) const noexcept {
   const Axis ax = fine_.axis_x(), ay = fine_.axis_y();
   const std::uint32_t ix = cell % ax.cells, iy = (cell / ax.cells) % ay.cells;
@@ -125,7 +122,7 @@ Status TrackingSession::measure_at(const ImageView& image, const Pose& centre, S
   GatedChoice choice;
   GABARIT_TRY(filter_.choose(fine_, scratch.fine.counters, centre, m.step.roi_centre_x, m.step.roi_centre_y, pose_.depth, choice));
   if (!choice.found) return Status::kOk;
-  m.score = m.raw_score = choice.score;
+  m.score = choice.score;
   m.next_score = choice.next_score;
   m.confidence = filter_.classify(m.score, m.next_score);
   // Not confident where the cell stands little above what clutter gives by
@@ -199,7 +196,7 @@ Status TrackingSession::track_fine(const ImageView& image, SessionScratch scratc
     if (better(at_last, m)) m = at_last;
   }
   out.step = m.step;
-  out.score = m.raw_score;
+  out.score = m.score;
   depth_margin_ = m.depth_margin;
   const Confidence confidence = m.confidence;
   if (confidence != Confidence::kNone) static_cast<void>(filter_.grade(m.score, m.next_score));  // moves the reference score

@@ -98,7 +98,6 @@ class TrackingSession {
     StepResult step;
     Confidence confidence = Confidence::kNone;
     float score = 0.0f, next_score = 0.0f;  // normalised scores of the chosen cell and the next candidate
-    float raw_score = 0.0f;                 // votes / stencil size
     Pose pose;                     // the chosen cell's pose, refined
     bool theta_observable = true;
     float depth_margin = 0.0f;     // the chosen cell's score over the best other depth's, minus 1
