@@ -28,6 +28,14 @@ std::vector<std::byte> small_table() {
   return build(point_model(testing::random_points(rng, 12, 6)), "-2:2:5", "-1:1:3");
 }
 
+// Writes a header field of `width` bytes (1, 2 or 4) at `at`, little-endian.
+void store_field(std::vector<std::byte>& t, std::size_t at, std::uint32_t value, int width) {
+  std::byte* p = t.data() + at;
+  if (width == 1) store_le<std::uint8_t>(p, static_cast<std::uint8_t>(value));
+  if (width == 2) store_le<std::uint16_t>(p, static_cast<std::uint16_t>(value));
+  if (width == 4) store_le<std::uint32_t>(p, value);
+}
+
 Status open_copy(const std::vector<std::byte>& bytes) {
   const std::vector<std::byte> exact(bytes.begin(), bytes.end());  // exact-size allocation for ASan
   TableView v;
@@ -153,8 +161,7 @@ TEST(TableView, CarriesTheModelImagesOfATableBuiltFromImages) {
   EXPECT_EQ(bytes.size() % 8, 0u);
   const auto edited = [&](std::size_t at, std::uint32_t value, int width) {
     auto bad = bytes;
-    if (width == 2) store_le<std::uint16_t>(bad.data() + at, static_cast<std::uint16_t>(value));
-    if (width == 4) store_le<std::uint32_t>(bad.data() + at, value);
+    store_field(bad, at, value, width);
     reseal(bad);
     return open_copy(bad);
   };
@@ -204,10 +211,7 @@ TEST(TableView, RejectsCraftedHeadersWithAValidChecksum) {
   };
   for (const Edit& e : edits) {
     auto bad = good;
-    std::byte* p = bad.data() + e.at;
-    if (e.width == 1) store_le<std::uint8_t>(p, static_cast<std::uint8_t>(e.value));
-    if (e.width == 2) store_le<std::uint16_t>(p, static_cast<std::uint16_t>(e.value));
-    if (e.width == 4) store_le<std::uint32_t>(p, e.value);
+    store_field(bad, e.at, e.value, e.width);
     reseal(bad);
     EXPECT_EQ(open_copy(bad), e.expected) << e.what << ": got " << status_name(open_copy(bad));
   }
@@ -232,10 +236,7 @@ TEST(TableView, RejectsFieldsBeyondTheLimitsWithAValidChecksum) {
   };
   for (const Edit& e : edits) {
     auto bad = good;
-    std::byte* p = bad.data() + e.at;
-    if (e.width == 1) store_le<std::uint8_t>(p, static_cast<std::uint8_t>(e.value));
-    if (e.width == 2) store_le<std::uint16_t>(p, static_cast<std::uint16_t>(e.value));
-    if (e.width == 4) store_le<std::uint32_t>(p, e.value);
+    store_field(bad, e.at, e.value, e.width);
     if (e.at == off::kDetectorKind) store_le<std::uint16_t>(bad.data() + off::kDetectorThreshold, e.value == 2 ? 1 : 0);
     reseal(bad);
     EXPECT_EQ(open_copy(bad), e.expected) << e.what << ": got " << status_name(open_copy(bad));
