@@ -16,7 +16,7 @@ TrackerBuffers::TrackerBuffers(const TableView& table, VoterChoice voter)
     throw Error("the dense voter takes at most " + std::to_string(kDenseMaxCells) + " cells; this table has " +
                 std::to_string(table.cell_count()));
   }
-  if (voter != VoterChoice::kCsr && fits) {
+  if (voter == VoterChoice::kDense || (voter == VoterChoice::kAuto && dense_voter_pays_off(table))) {
     masks_.resize(dense_mask_words(table.roi_pixels(), table.cell_count()));
     dense_scratch_.resize(dense_scratch_words(table.cell_count()));
     if (build_dense_masks(table, masks_) != Status::kOk) throw Error("internal error: building dense masks failed");

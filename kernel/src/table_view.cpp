@@ -1,6 +1,7 @@
 #include "gabarit/table_view.hpp"
 
 #include <cstring>
+#include <type_traits>
 
 #include "gabarit/assert.hpp"
 #include "gabarit/crc32.hpp"
@@ -34,12 +35,34 @@ Status check_axis(const std::byte* base, std::size_t at, float limit, std::uint3
   return Status::kOk;
 }
 
-template <class Ref>
-Status check_references(const std::byte* offsets, const std::byte* refs, std::uint32_t pixels,
+// Offsets start at 0, never decrease and end at the reference count; compact
+// offsets are also canonical (each block's first delta is 0), so one table
+// has one encoding of its lists.
+template <class Offsets>
+Status check_offsets(const Offsets& offsets, std::uint32_t pixels, std::uint32_t reference_count,
+                     unsigned block_log2) noexcept {
+  if constexpr (!std::is_same_v<Offsets, WideOffsets>) {
+    for (std::uint32_t p = 0; p <= pixels; p += 1u << block_log2) {
+      if (load_le<std::uint32_t>(offsets.bases + (std::size_t{p} >> block_log2) * 4) != offsets.begin(p)) {
+        return Status::kOffsetsNotMonotonic;
+      }
+    }
+  }
+  (void)block_log2;
+  if (offsets.begin(0) != 0) return Status::kOffsetsNotMonotonic;
+  for (std::uint32_t p = 0; p < pixels; ++p) {
+    if (offsets.begin(p + 1) < offsets.begin(p)) return Status::kOffsetsNotMonotonic;
+  }
+  if (offsets.begin(pixels) != reference_count) return Status::kOffsetsNotMonotonic;
+  return Status::kOk;
+}
+
+template <class Ref, class Offsets>
+Status check_references(const Offsets& offsets, const std::byte* refs, std::uint32_t pixels,
                         std::uint32_t cell_count) noexcept {
   for (std::uint32_t p = 0; p < pixels; ++p) {
-    const std::uint32_t begin = load_le<std::uint32_t>(offsets + std::size_t{p} * 4);
-    const std::uint32_t end = load_le<std::uint32_t>(offsets + std::size_t{p} * 4 + 4);
+    const std::uint32_t begin = offsets.begin(p);
+    const std::uint32_t end = offsets.begin(p + 1);
     std::uint32_t previous = 0;
     for (std::uint32_t i = begin; i < end; ++i) {
       const std::uint32_t r = load_le<Ref>(refs + std::size_t{i} * sizeof(Ref));
@@ -55,16 +78,16 @@ Status check_references(const std::byte* offsets, const std::byte* refs, std::ui
 // (scores are votes / stencil_size, at most 1). Counted without scratch of
 // the cell count's size: kChunk cells at a time, each pixel's list being
 // sorted, so a chunk's references of a pixel are found by binary search.
-template <class Ref>
-Status check_stencil_counts(const std::byte* offsets, const std::byte* refs, const std::byte* cells, std::uint32_t pixels,
+template <class Ref, class Offsets>
+Status check_stencil_counts(const Offsets& offsets, const std::byte* refs, const std::byte* cells, std::uint32_t pixels,
                             std::uint32_t cell_count) noexcept {
   constexpr std::uint32_t kChunk = 512;  // 2 KiB of stack
   for (std::uint32_t first = 0; first < cell_count; first += kChunk) {
     const std::uint32_t last = cell_count - first < kChunk ? cell_count : first + kChunk;
     std::uint32_t counts[kChunk] = {};
     for (std::uint32_t p = 0; p < pixels; ++p) {
-      std::uint32_t lo = load_le<std::uint32_t>(offsets + std::size_t{p} * 4);
-      const std::uint32_t end = load_le<std::uint32_t>(offsets + std::size_t{p} * 4 + 4);
+      std::uint32_t lo = offsets.begin(p);
+      const std::uint32_t end = offsets.begin(p + 1);
       std::uint32_t hi = end;
       while (lo < hi) {  // the first reference >= first
         const std::uint32_t mid = lo + (hi - lo) / 2;
@@ -119,11 +142,20 @@ Status TableView::open(std::span<const std::byte> bytes, TableView& out) noexcep
   // Header fields. Past the CRC only a deliberately crafted table reaches
   // here, but it must still be refused without any out-of-bounds read.
   // Flags: only the model-images section, and only from version 1.1.
+  // Flags: the model-images section from version 1.1, compact offsets from 1.2.
   const std::uint32_t flags = load_le<std::uint32_t>(b + off::kFlags);
-  const bool has_images = flags == table_format::kFlagModelImages;
-  if ((flags != 0 && !has_images) || (has_images && load_le<std::uint16_t>(b + off::kVersionMinor) < 1) || load_le<std::uint16_t>(b + off::kReserved58) != 0 ||
+  const std::uint16_t minor = load_le<std::uint16_t>(b + off::kVersionMinor);
+  const bool has_images = (flags & table_format::kFlagModelImages) != 0;
+  const bool compact = (flags & table_format::kFlagCompactOffsets) != 0;
+  const std::uint8_t delta_bytes = load_le<std::uint8_t>(b + off::kOffsetDeltaBytes);
+  const std::uint8_t block_log2 = load_le<std::uint8_t>(b + off::kOffsetBlockLog2);
+  if ((flags & ~table_format::kKnownFlags) != 0 || (has_images && minor < 1) || (compact && minor < 2) ||
+      load_le<std::uint16_t>(b + off::kReserved58) != 0 ||
       (!has_images && load_le<std::uint32_t>(b + off::kModelImagesOffset) != 0) ||
-      !all_zero(b + off::kReserved144, table_format::kHeaderBytes - off::kReserved144)) {
+      (compact ? (delta_bytes != 1 && delta_bytes != 2) || block_log2 < table_format::kMinOffsetBlockLog2 ||
+                     block_log2 > table_format::kMaxOffsetBlockLog2
+               : delta_bytes != 0 || block_log2 != 0) ||
+      !all_zero(b + off::kReserved146, table_format::kHeaderBytes - off::kReserved146)) {
     return Status::kBadHeaderField;
   }
   const std::uint32_t cell_count = load_le<std::uint32_t>(b + off::kCellCount);
@@ -183,7 +215,7 @@ Status TableView::open(std::span<const std::byte> bytes, TableView& out) noexcep
   // The layout is canonical (table_format::layout_of), so any other offset is an error.
   const std::uint32_t pixels = std::uint32_t{roi_width} * roi_height;
   const table_format::Layout layout = table_format::layout_of(
-      {cell_count, pixels, reference_count, reference_bytes, depth_count, model_point_count, image_bytes});
+      {cell_count, pixels, reference_count, reference_bytes, depth_count, model_point_count, image_bytes, delta_bytes, block_log2});
   if (load_le<std::uint32_t>(b + off::kCellsOffset) != layout.cells ||
       load_le<std::uint32_t>(b + off::kPixelOffsetsOffset) != layout.pixel_offsets ||
       load_le<std::uint32_t>(b + off::kReferencesOffset) != layout.references ||
@@ -196,24 +228,34 @@ Status TableView::open(std::span<const std::byte> bytes, TableView& out) noexcep
   const std::uint32_t cells_at = layout.cells, offsets_at = layout.pixel_offsets, refs_at = layout.references,
                       counts_at = layout.model_counts, points_at = layout.model_points;
 
-  // CSR offsets: start at 0, never decrease, end at the reference count.
+  // CSR offsets and lists, in the table's offset encoding.
   const std::byte* offsets = b + offsets_at;
-  if (load_le<std::uint32_t>(offsets) != 0) return Status::kOffsetsNotMonotonic;
-  for (std::uint32_t p = 0; p < pixels; ++p) {
-    if (load_le<std::uint32_t>(offsets + std::size_t{p} * 4 + 4) < load_le<std::uint32_t>(offsets + std::size_t{p} * 4)) {
-      return Status::kOffsetsNotMonotonic;
-    }
-  }
-  if (load_le<std::uint32_t>(offsets + std::size_t{pixels} * 4) != reference_count) {
-    return Status::kOffsetsNotMonotonic;
-  }
-
+  const std::byte* deltas =
+      compact ? offsets + table_format::align_up(table_format::offset_block_count(pixels, block_log2) * 4) : nullptr;
   const std::byte* refs = b + refs_at;
-  switch (reference_bytes) {
-    case 1: GABARIT_TRY(check_references<std::uint8_t>(offsets, refs, pixels, cell_count)); break;
-    case 2: GABARIT_TRY(check_references<std::uint16_t>(offsets, refs, pixels, cell_count)); break;
-    default: GABARIT_TRY(check_references<std::uint32_t>(offsets, refs, pixels, cell_count)); break;
-  }
+  const auto check_lists = [&](const auto& reader) -> Status {
+    GABARIT_TRY(check_offsets(reader, pixels, reference_count, block_log2));
+    switch (reference_bytes) {
+      case 1: return check_references<std::uint8_t>(reader, refs, pixels, cell_count);
+      case 2: return check_references<std::uint16_t>(reader, refs, pixels, cell_count);
+      default: return check_references<std::uint32_t>(reader, refs, pixels, cell_count);
+    }
+  };
+  const auto check_counts = [&](const auto& reader) -> Status {
+    switch (reference_bytes) {
+      case 1: return check_stencil_counts<std::uint8_t>(reader, refs, b + cells_at, pixels, cell_count);
+      case 2: return check_stencil_counts<std::uint16_t>(reader, refs, b + cells_at, pixels, cell_count);
+      default: return check_stencil_counts<std::uint32_t>(reader, refs, b + cells_at, pixels, cell_count);
+    }
+  };
+  const auto with_reader = [&](const auto& check) -> Status {
+    switch (delta_bytes) {
+      case 0: return check(WideOffsets{offsets});
+      case 1: return check(CompactOffsets<std::uint8_t>{offsets, deltas, block_log2});
+      default: return check(CompactOffsets<std::uint16_t>{offsets, deltas, block_log2});
+    }
+  };
+  GABARIT_TRY(with_reader(check_lists));
 
   // Cell descriptors: bounded ordered bounds (twice the axis limit: a cell
   // may reach half a cell past its axis), a valid depth, and stencil sizes
@@ -239,11 +281,7 @@ Status TableView::open(std::span<const std::byte> bytes, TableView& out) noexcep
   if (stencil_total != reference_count || stencil_max != load_le<std::uint32_t>(b + off::kMaxStencilSize)) {
     return Status::kStencilSizeMismatch;
   }
-  switch (reference_bytes) {
-    case 1: GABARIT_TRY(check_stencil_counts<std::uint8_t>(offsets, refs, b + cells_at, pixels, cell_count)); break;
-    case 2: GABARIT_TRY(check_stencil_counts<std::uint16_t>(offsets, refs, b + cells_at, pixels, cell_count)); break;
-    default: GABARIT_TRY(check_stencil_counts<std::uint32_t>(offsets, refs, b + cells_at, pixels, cell_count)); break;
-  }
+  GABARIT_TRY(with_reader(check_counts));
 
   std::uint64_t model_total = 0;
   for (std::uint32_t d = 0; d < depth_count; ++d) model_total += load_le<std::uint32_t>(b + counts_at + std::size_t{d} * 4);
@@ -253,6 +291,9 @@ Status TableView::open(std::span<const std::byte> bytes, TableView& out) noexcep
   view.base_ = b;
   view.cells_ = b + cells_at;
   view.pixel_offsets_ = offsets;
+  view.offset_deltas_ = deltas;
+  view.offset_delta_bytes_ = delta_bytes;
+  view.offset_block_log2_ = block_log2;
   view.references_ = refs;
   view.model_counts_ = b + counts_at;
   view.model_points_ = b + points_at;

@@ -24,32 +24,48 @@ inline void bump(VoteCounter* counters, std::uint32_t cell) noexcept {
   counters[cell] = static_cast<VoteCounter>(c + (c != kVoteCounterMax));
 }
 
-template <class Ref>
-void vote_scalar(const TableView& table, std::span<const RoiPoint> features, VoteCounter* counters,
+// Adds `one` (0 or 1) to a counter, saturating, without a branch.
+inline void bump_by(VoteCounter* counters, std::uint32_t cell, bool one) noexcept {
+  const VoteCounter c = counters[cell];
+  counters[cell] = static_cast<VoteCounter>(c + (one & (c != kVoteCounterMax)));
+}
+
+// The first two references of every list are voted without a branch (a
+// slot past the list adds 0 to whichever counter its index reads), so the
+// short lists of decimated tables cost no mispredicted loop exit; longer
+// lists run the loop from their third reference.
+template <class Ref, class Offsets>
+void vote_scalar(const TableView& table, const Offsets& offsets, std::span<const RoiPoint> features, VoteCounter* counters,
                  std::uint64_t& votes) noexcept {
-  const std::byte* offsets = table.pixel_offsets_data();
   const std::byte* refs = table.references_data();
   const std::uint32_t w = table.roi_width();
+  const std::uint32_t references = table.reference_count();
+  if (references == 0) return;
+  const auto ref_at = [refs, references](std::uint32_t i) {
+    const std::uint32_t in_range = i < references ? i : references - 1;
+    return static_cast<std::uint32_t>(load_le<Ref>(refs + std::size_t{in_range} * sizeof(Ref)));
+  };
   for (const RoiPoint& f : features) {
     const std::size_t pixel = std::size_t{f.row} * w + f.col;
-    const std::uint32_t begin = load_le<std::uint32_t>(offsets + pixel * 4);
-    const std::uint32_t end = load_le<std::uint32_t>(offsets + pixel * 4 + 4);
-    for (std::uint32_t i = begin; i < end; ++i) bump(counters, load_le<Ref>(refs + std::size_t{i} * sizeof(Ref)));
+    const std::uint32_t begin = offsets.begin(pixel);
+    const std::uint32_t end = offsets.begin(pixel + 1);
+    bump_by(counters, ref_at(begin), begin < end);
+    bump_by(counters, ref_at(begin + 1), begin + 1 < end);
+    for (std::uint32_t i = begin + 2; i < end; ++i) bump(counters, load_le<Ref>(refs + std::size_t{i} * sizeof(Ref)));
     votes += end - begin;
   }
 }
 
-template <class Ref>
-void vote_cell_range(const TableView& table, std::span<const RoiPoint> features, VoteCounter* counters,
+template <class Ref, class Offsets>
+void vote_cell_range(const TableView& table, const Offsets& offsets, std::span<const RoiPoint> features, VoteCounter* counters,
                      std::uint32_t cell_begin, std::uint32_t cell_end, std::uint64_t& votes) noexcept {
-  const std::byte* offsets = table.pixel_offsets_data();
   const std::byte* refs = table.references_data();
   const std::uint32_t w = table.roi_width();
   const auto ref_at = [refs](std::uint32_t i) { return static_cast<std::uint32_t>(load_le<Ref>(refs + std::size_t{i} * sizeof(Ref))); };
   for (const RoiPoint& f : features) {
     const std::size_t pixel = std::size_t{f.row} * w + f.col;
-    std::uint32_t lo = load_le<std::uint32_t>(offsets + pixel * 4);
-    std::uint32_t end = load_le<std::uint32_t>(offsets + pixel * 4 + 4);
+    std::uint32_t lo = offsets.begin(pixel);
+    const std::uint32_t end = offsets.begin(pixel + 1);
     // First reference >= cell_begin (lists are strictly increasing).
     std::uint32_t hi = end;
     while (lo < hi) {
@@ -74,11 +90,13 @@ Status accumulate_votes_for_cells(const TableView& table, std::span<const RoiPoi
   GABARIT_TRY(check_counters(table, counters));
   GABARIT_TRY(check_features(table, features));
   if (cell_begin > cell_end || cell_end > table.cell_count()) return Status::kInvalidArgument;
-  switch (table.reference_bytes()) {
-    case 1: vote_cell_range<std::uint8_t>(table, features, counters.data(), cell_begin, cell_end, tally.votes); break;
-    case 2: vote_cell_range<std::uint16_t>(table, features, counters.data(), cell_begin, cell_end, tally.votes); break;
-    default: vote_cell_range<std::uint32_t>(table, features, counters.data(), cell_begin, cell_end, tally.votes); break;
-  }
+  table.with_offsets([&](const auto& offsets) {
+    switch (table.reference_bytes()) {
+      case 1: vote_cell_range<std::uint8_t>(table, offsets, features, counters.data(), cell_begin, cell_end, tally.votes); break;
+      case 2: vote_cell_range<std::uint16_t>(table, offsets, features, counters.data(), cell_begin, cell_end, tally.votes); break;
+      default: vote_cell_range<std::uint32_t>(table, offsets, features, counters.data(), cell_begin, cell_end, tally.votes); break;
+    }
+  });
   return Status::kOk;
 }
 
@@ -92,11 +110,13 @@ Status accumulate_votes(const TableView& table, std::span<const RoiPoint> featur
                         std::span<VoteCounter> counters, VoteTally& tally) noexcept {
   GABARIT_TRY(check_counters(table, counters));
   GABARIT_TRY(check_features(table, features));
-  switch (table.reference_bytes()) {
-    case 1: vote_scalar<std::uint8_t>(table, features, counters.data(), tally.votes); break;
-    case 2: vote_scalar<std::uint16_t>(table, features, counters.data(), tally.votes); break;
-    default: vote_scalar<std::uint32_t>(table, features, counters.data(), tally.votes); break;
-  }
+  table.with_offsets([&](const auto& offsets) {
+    switch (table.reference_bytes()) {
+      case 1: vote_scalar<std::uint8_t>(table, offsets, features, counters.data(), tally.votes); break;
+      case 2: vote_scalar<std::uint16_t>(table, offsets, features, counters.data(), tally.votes); break;
+      default: vote_scalar<std::uint32_t>(table, offsets, features, counters.data(), tally.votes); break;
+    }
+  });
   tally.features += static_cast<std::uint32_t>(features.size());
   return Status::kOk;
 }

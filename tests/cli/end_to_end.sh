@@ -167,7 +167,7 @@ cp "$work/one.csv" "$work/prev.csv"
 expect 1 "not a Y4M" $g track --table "$work/a.gbt" --frames "$d/gt.csv" --init "$init0" -o "$work/prev.csv"
 cmp -s "$work/one.csv" "$work/prev.csv" || fail "a failed track clobbered its previous output"
 cp "$work/a.gbt" "$work/prev.gbt"
-expect 1 "kept none" $g tables build --model-points "$d/model.csv" --binary --x -5:5:11 --y -5:5:11 --keep 1e-9 -o "$work/prev.gbt"
+expect 1 "kept none" $g tables build --model-points "$d/model.csv" --binary --x -5:5:11 --y -5:5:11 --keep 1e-9 --decimation global -o "$work/prev.gbt"
 cmp -s "$work/a.gbt" "$work/prev.gbt" || fail "a failed tables build clobbered the previous table"
 [ -z "$(find "$work" -maxdepth 1 -name '.*.tmp.*')" ] || fail "temporary files left behind: $(ls -a "$work")"
 # Frames from a pipe, standard input and a FIFO: the same poses as the file.

@@ -26,7 +26,8 @@ namespace tf = table_format;
 namespace off = tf::offset;
 
 std::vector<std::byte> build(const std::vector<host::Point>& points, int depths, const char* x, const char* theta,
-                             table_format::DetectorKind kind, std::uint16_t threshold, double keep, bool images = false) {
+                             table_format::DetectorKind kind, std::uint16_t threshold, double keep, bool images = false,
+                             bool compact = true) {
   host::ModelStack model;
   for (int d = 0; d < depths; ++d) {
     std::vector<host::Point> scaled;
@@ -48,6 +49,7 @@ std::vector<std::byte> build(const std::vector<host::Point>& points, int depths,
   o.space.y = host::parse_axis(x, "y");
   o.space.theta = host::parse_axis(theta, "theta");
   o.keep = keep;
+  o.compact_offsets = compact;
   return host::build_table(model, o);
 }
 
@@ -74,11 +76,14 @@ int main(int argc, char** argv) {
   const auto binary = table_format::DetectorKind::kBinary, gradient = table_format::DetectorKind::kGradientRows,
              canny = table_format::DetectorKind::kCanny;
   const std::vector<std::pair<std::string, std::vector<std::byte>>> valid = {
-      {"binary", build(curve, 1, "-2:2:5", "0:0:1", binary, 0, 1.0)},
+      // u32 offsets (format 1.0): the variants below edit them in place.
+      {"binary", build(curve, 1, "-2:2:5", "0:0:1", binary, 0, 1.0, false, false)},
+      {"binary-compact", build(curve, 1, "-2:2:5", "0:0:1", binary, 0, 1.0)},
       {"rotation", build(curve, 1, "-1:1:3", "-2:2:3", gradient, 20, 1.0)},
       {"depths", build(curve, 3, "-1:1:3", "0:0:1", canny, 30, 1.0)},
       {"model-images", build(curve, 2, "-1:1:3", "-1:1:3", canny, 30, 1.0, true)},
       {"decimated", build(curve, 1, "-3:3:7", "0:0:1", binary, 0, 0.3)},
+      {"decimated-wide", build(curve, 1, "-3:3:7", "0:0:1", binary, 0, 0.3, false, false)},
       {"two-byte-refs", build(curve, 1, "-8:8:17", "0:0:1", binary, 0, 1.0)},
       {"four-byte-refs", build({{0, 0}}, 1, "-128:128:257", "0:0:1", binary, 0, 1.0)},  // 66,049 cells
   };

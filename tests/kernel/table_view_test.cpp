@@ -23,9 +23,15 @@ using testing::build;
 using testing::point_model;
 using testing::reseal;
 
-std::vector<std::byte> small_table() {
+// A small table with one u32 offset per pixel (format 1.0), which the
+// crafted-payload tests below edit in place.
+std::vector<std::byte> small_table(bool compact = false) {
   host::Rng rng(11);
-  return build(point_model(testing::random_points(rng, 12, 6)), "-2:2:5", "-1:1:3");
+  host::BuildOptions o;
+  o.space.x = host::parse_axis("-2:2:5", "x");
+  o.space.y = host::parse_axis("-1:1:3", "y");
+  o.compact_offsets = compact;
+  return host::build_table(point_model(testing::random_points(rng, 12, 6)), o);
 }
 
 // Writes a header field of `width` bytes (1, 2 or 4) at `at`, little-endian.
@@ -153,7 +159,7 @@ TEST(TableView, CarriesTheModelImagesOfATableBuiltFromImages) {
   const std::vector<std::byte> bytes = host::build_table(model, o);
   const TableView t = testing::open_table(bytes);
   ASSERT_TRUE(t.has_model_images());
-  EXPECT_EQ(load_le<std::uint16_t>(bytes.data() + off::kVersionMinor), 1);
+  EXPECT_EQ(load_le<std::uint16_t>(bytes.data() + off::kVersionMinor), 2);  // compact offsets too
   const ImageView second = t.model_image(1);
   EXPECT_EQ(second.width, 7u);
   EXPECT_EQ(second.height, 5u);
@@ -171,12 +177,53 @@ TEST(TableView, CarriesTheModelImagesOfATableBuiltFromImages) {
   EXPECT_EQ(edited(off::kModelWidth, 0, 2), Status::kBadHeaderField);
   EXPECT_EQ(edited(off::kModelWidth, 0xFFFFFFFFu /* 65535 x 65535 */, 4), Status::kCountTooLarge);
   EXPECT_EQ(edited(off::kVersionMinor, 0, 2), Status::kBadHeaderField);
-  // Without them (--no-model-images) the table is format 1.0, as before.
+  o.compact_offsets = false;
+  const std::vector<std::byte> wide = host::build_table(model, o);
+  EXPECT_EQ(load_le<std::uint16_t>(wide.data() + off::kVersionMinor), 1);
+  // Without them (--no-model-images) and with u32 offsets the table is format 1.0, as before.
   o.store_model_images = false;
   const std::vector<std::byte> plain = host::build_table(model, o);
   EXPECT_FALSE(testing::open_table(plain).has_model_images());
   EXPECT_EQ(load_le<std::uint16_t>(plain.data() + off::kVersionMinor), 0);
-  EXPECT_EQ(plain.size() + 2 * 35 + 2, bytes.size());  // 70 bytes of images, aligned to 8
+  EXPECT_EQ(plain.size() + 2 * 35 + 2, wide.size());  // 70 bytes of images, aligned to 8
+}
+
+// Compact offsets (format 1.2) hold the same lists as u32 offsets, in fewer
+// bytes, and a crafted encoding is refused.
+TEST(TableView, CompactOffsetsHoldTheSameListsAndRefuseACraftedEncoding) {
+  const auto wide = small_table(false);
+  const auto compact = small_table(true);
+  const TableView w = testing::open_table(wide);
+  const TableView c = testing::open_table(compact);
+  ASSERT_EQ(w.offset_delta_bytes(), 0);
+  ASSERT_NE(c.offset_delta_bytes(), 0);
+  EXPECT_LT(compact.size(), wide.size());
+  EXPECT_EQ(load_le<std::uint16_t>(compact.data() + off::kVersionMinor), 2);
+  ASSERT_EQ(c.roi_pixels(), w.roi_pixels());
+  for (std::uint32_t p = 0; p <= w.roi_pixels(); ++p) ASSERT_EQ(c.references_begin(p), w.references_begin(p)) << p;
+  for (std::uint32_t i = 0; i < w.reference_count(); ++i) ASSERT_EQ(c.reference(i), w.reference(i));
+
+  const auto edited = [&](std::size_t at, std::uint32_t value, int width) {
+    auto bad = compact;
+    store_field(bad, at, value, width);
+    reseal(bad);
+    return open_copy(bad);
+  };
+  EXPECT_EQ(edited(off::kOffsetDeltaBytes, 3, 1), Status::kBadHeaderField);
+  EXPECT_EQ(edited(off::kOffsetBlockLog2, 11, 1), Status::kBadHeaderField);
+  EXPECT_EQ(edited(off::kOffsetBlockLog2, 1, 1), Status::kBadHeaderField);
+  EXPECT_EQ(edited(off::kVersionMinor, 1, 2), Status::kBadHeaderField);
+  // Another block size moves the deltas: the layout no longer matches.
+  EXPECT_NE(edited(off::kOffsetBlockLog2, c.offset_block_log2() + 1u, 1), Status::kOk);
+  // A block whose first delta is not 0 (not canonical), and a delta past the end.
+  const std::uint32_t offsets_at = load_le<std::uint32_t>(compact.data() + off::kPixelOffsetsOffset);
+  const std::uint32_t blocks = table_format::offset_block_count(c.roi_pixels(), c.offset_block_log2());
+  const std::uint32_t deltas_at = offsets_at + table_format::align_up(blocks * 4);
+  const std::uint32_t second_block = 1u << c.offset_block_log2();
+  ASSERT_LE(second_block, c.roi_pixels());
+  EXPECT_EQ(edited(deltas_at + second_block * c.offset_delta_bytes(), 1, c.offset_delta_bytes()), Status::kOffsetsNotMonotonic);
+  EXPECT_EQ(edited(deltas_at + c.roi_pixels() * c.offset_delta_bytes(), 200, c.offset_delta_bytes()), Status::kOffsetsNotMonotonic);
+  EXPECT_EQ(edited(offsets_at + 4, c.references_begin(second_block) + 1, 4), Status::kOffsetsNotMonotonic);
 }
 
 struct Edit {
@@ -205,8 +252,10 @@ TEST(TableView, RejectsCraftedHeadersWithAValidChecksum) {
       {"keep ratio above 1", off::kKeepRatio, 0x40000000u /* 2.0f */, 4, Status::kBadHeaderField},
       {"section moved", off::kReferencesOffset, 8, 4, Status::kSectionOutOfBounds},
       {"max stencil size wrong", off::kMaxStencilSize, 3, 4, Status::kStencilSizeMismatch},
-      {"reserved byte set", off::kReserved144 + 5, 1, 1, Status::kBadHeaderField},
-      {"an unknown flag", off::kFlags, 2, 4, Status::kBadHeaderField},
+      {"reserved byte set", off::kReserved146 + 5, 1, 1, Status::kBadHeaderField},
+      {"an unknown flag", off::kFlags, 4, 4, Status::kBadHeaderField},
+      {"the compact-offsets flag in a 1.0 table", off::kFlags, 2, 4, Status::kBadHeaderField},
+      {"an offset delta width without compact offsets", off::kOffsetDeltaBytes, 1, 1, Status::kBadHeaderField},
       {"a model-images offset without the flag", off::kModelImagesOffset, 8, 4, Status::kBadHeaderField},
   };
   for (const Edit& e : edits) {
@@ -255,7 +304,13 @@ TEST(TableView, RejectsFieldsBeyondTheLimitsWithAValidChecksum) {
 // cell's score could pass 1 and a clutter frame report "tracking".
 TEST(TableView, RejectsACellReferencedOtherThanItsStencilSize) {
   host::Rng rng(11);
-  const auto good = build(point_model(testing::random_points(rng, 12, 6)), "-2:2:5", "-1:1:3", "0:0:1", 0.5, 3);  // decimated
+  host::BuildOptions o;  // decimated in one global pass, so stencil sizes differ
+  o.space.x = host::parse_axis("-2:2:5", "x");
+  o.space.y = host::parse_axis("-1:1:3", "y");
+  o.keep = 0.5;
+  o.seed = 3;
+  o.decimation.method = host::Decimation::kGlobal;
+  const auto good = host::build_table(point_model(testing::random_points(rng, 12, 6)), o);
   const std::uint32_t cells_at = load_le<std::uint32_t>(good.data() + off::kCellsOffset);
   const TableView t = testing::open_table(good);
   const auto below_max = [&](std::uint32_t c) { return t.stencil_size(c) > 0 && t.stencil_size(c) < t.max_stencil_size(); };

@@ -3,8 +3,12 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <set>
+#include <string>
 #include <vector>
 
+#include "gabarit/host/state_space.hpp"
+#include "gabarit/host/table_builder.hpp"
 #include "test_tables.hpp"
 
 namespace gabarit {
@@ -37,6 +41,37 @@ TEST(Voter, CountsEachFeatureOncePerCellItsPixelLists) {
   }
   EXPECT_EQ(counters, expected);
   EXPECT_EQ(tally.votes, refs);
+}
+
+// Every offset encoding (u32 per pixel, compact u8 or u16 deltas) and list
+// length (the voter takes the first two references of a list without a
+// branch) votes exactly what the lists say, on awkward sizes.
+TEST(Voter, EveryOffsetEncodingVotesWhatItsListsSay) {
+  host::Rng rng(17);
+  std::set<int> encodings;
+  for (int round = 0; round < 12; ++round) {
+    host::BuildOptions o;
+    const int half = 1 + round % 6;
+    const std::string axis = std::to_string(-half) + ":" + std::to_string(half) + ":" + std::to_string(2 * half + 1);
+    o.space.x = host::parse_axis(axis, "x");
+    o.space.y = host::parse_axis(round % 2 ? "0:0:1" : axis, "y");
+    o.keep = round % 3 == 0 ? 1.0 : round % 3 == 1 ? 0.3 : 0.04;
+    o.compact_offsets = round % 4 != 3;
+    const auto bytes = host::build_table(point_model(testing::random_points(rng, 8 + 9 * round, 4 + round)), o);
+    const TableView t = testing::open_table(bytes);
+    encodings.insert(t.offset_delta_bytes());
+    const auto features = random_features(rng, t, 0.35);
+    std::vector<VoteCounter> counters(t.cell_count(), 0);
+    VoteTally tally;
+    ASSERT_EQ(accumulate_votes(t, features, counters, tally), Status::kOk);
+    std::vector<VoteCounter> expected(t.cell_count(), 0);
+    for (const RoiPoint& f : features) {
+      const std::uint32_t p = std::uint32_t{f.row} * t.roi_width() + f.col;
+      for (std::uint32_t i = t.references_begin(p); i < t.references_begin(p + 1); ++i) ++expected[t.reference(i)];
+    }
+    EXPECT_EQ(counters, expected) << "round " << round;
+  }
+  EXPECT_TRUE(encodings.count(0) && (encodings.count(1) || encodings.count(2)));
 }
 
 TEST(Voter, TiesResolveToTheLowestCellIndex) {

@@ -24,12 +24,13 @@
 #include <sstream>
 #include <thread>
 
+#include "decimation_study.hpp"
 #include "experiments.hpp"
 #include "microscope.hpp"
 #include "suite.hpp"
 #include "gabarit/app/error.hpp"
 #include "gabarit/host/thesis_shapes.hpp"
-#include "svg_plot.hpp"
+#include "gabarit/host/svg_plot.hpp"
 
 #ifndef GABARIT_BUILD_TYPE
 #define GABARIT_BUILD_TYPE "unknown"
@@ -81,6 +82,7 @@ struct Options {
   std::string regression_csv;
   bool microscope = false;
   bool suite = false;
+  bool decimation = false;
   std::uint32_t scenes = 0;
   bool no_peer = false;
 };
@@ -218,10 +220,10 @@ int run(const Options& o) {
   std::ostringstream hist_csv, robust_csv;
   hist_csv << "shape,keep,refs_per_pixel,pixels\n";
   robust_csv << "shape,keep,references,mean_margin,min_margin\n";
-  std::map<std::string, std::vector<svg::Series>> hist_series, robust_series;
+  std::map<std::string, std::vector<host::svg::Series>> hist_series, robust_series;
   std::map<std::string, std::vector<std::string>> robust_rows;
   for (const Shape& s : shapes) {
-    svg::Series mean{"mean", {}, {}}, min{"minimum", {}, {}};
+    host::svg::Series mean{"mean", {}, {}}, min{"minimum", {}, {}};
     for (double keep : keeps) {
       const auto bytes = shape_table(s, keep, 1);
       TableView t;
@@ -234,7 +236,7 @@ int run(const Options& o) {
       min.x.push_back(keep), min.y.push_back(static_cast<double>(r.min));
       if (keep == 1 || keep == 0.5 || keep == 0.1 || keep == 0.01) {
         const auto h = refs_per_pixel(t);
-        svg::Series series{"keep " + pct(keep), {}, {}};
+        host::svg::Series series{"keep " + pct(keep), {}, {}};
         for (std::size_t k = 0; k < h.size(); ++k) {
           hist_csv << s.name << ',' << keep << ',' << k << ',' << h[k] << '\n';
           series.x.push_back(static_cast<double>(k)), series.y.push_back(static_cast<double>(h[k]));
@@ -299,7 +301,7 @@ int run(const Options& o) {
         md << ", " << r.method.substr(r.method.find(", ") + 2) << ": " << fmt(cv_ccoeff / r.micros, 1) << "×";
       }
     md << ".\n\n![timing " << s.name << "](timing_" << s.name << ".svg)\n\n";
-    svg::write(o.out + "/timing_" + s.name + ".svg", svg::bars("Time per frame, " + s.name + " (" + std::to_string(s.points.size()) + " points), 20% noise",
+    host::svg::write(o.out + "/timing_" + s.name + ".svg", host::svg::bars("Time per frame, " + s.name + " (" + std::to_string(s.points.size()) + " points), 20% noise",
                                                              "microseconds per frame", labels, values));
   }
 
@@ -335,16 +337,16 @@ int run(const Options& o) {
       md << " keep " << pct(k) << ": " << (limit < 0 ? "none" : pct(limit)) << ";";
     }
     md << "\n\n![grid " << s.name << "](grid_" << s.name << ".svg)\n\n";
-    svg::write(o.out + "/grid_" + s.name + ".svg",
-               svg::heatmap("Wrong frames out of " + std::to_string(grid_frames) + ", " + s.name, "fraction of references kept", xl,
+    host::svg::write(o.out + "/grid_" + s.name + ".svg",
+               host::svg::heatmap("Wrong frames out of " + std::to_string(grid_frames) + ", " + s.name, "fraction of references kept", xl,
                             "salt-and-pepper noise", yl, values, static_cast<double>(grid_frames)));
   }
 
   md << "## Fig. 6.20: references per ROI pixel\n\n";
   for (const Shape& s : shapes) {
     md << "![refs per pixel " << s.name << "](refs_per_pixel_" << s.name << ".svg)\n\n";
-    svg::write(o.out + "/refs_per_pixel_" + s.name + ".svg",
-               svg::lines("ROI pixels by number of cells they list, " + s.name, "references (cells) per pixel", "pixels", hist_series[s.name], false, true));
+    host::svg::write(o.out + "/refs_per_pixel_" + s.name + ".svg",
+               host::svg::lines("ROI pixels by number of cells they list, " + s.name, "references (cells) per pixel", "pixels", hist_series[s.name], false, true));
   }
   md << "Data: `refs_per_pixel.csv`.\n\n## Figs. 6.26/6.27: robustness indicators\n\n"
         "For each stencil, its size minus its overlap with its most overlapping stencil; mean and minimum over the 121 stencils.\n\n";
@@ -352,8 +354,8 @@ int run(const Options& o) {
     md << "### " << s.name << "\n\n| keep | references | table bytes | mean margin | min margin |\n|---:|---:|---:|---:|---:|\n";
     for (const auto& row : robust_rows[s.name]) md << row << "\n";
     md << "\n![robustness " << s.name << "](robustness_" << s.name << ".svg)\n\n";
-    svg::write(o.out + "/robustness_" + s.name + ".svg",
-               svg::lines("Stencil robustness indicators, " + s.name, "fraction of references kept", "pixels", robust_series[s.name], true, false));
+    host::svg::write(o.out + "/robustness_" + s.name + ".svg",
+               host::svg::lines("Stencil robustness indicators, " + s.name, "fraction of references kept", "pixels", robust_series[s.name], true, false));
   }
   const double seconds = std::chrono::duration<double>(Clock::now() - started).count();
   md << "---\nWhole bench: " << fmt(seconds) << " s. Files: timing.csv, grid.csv, refs_per_pixel.csv, robustness.csv, *.svg.\n";
@@ -366,6 +368,7 @@ constexpr const char* kHelp =
     "usage: gabarit bench [--quick] [--out DIR] [--threads N] [--frames N] [--timing-frames N]\n"
     "       gabarit bench --microscope [--quick] [--out DIR]\n"
     "       gabarit bench --suite [--quick] [--out DIR] [--scenes N] [--frames N] [--no-peer]\n"
+    "       gabarit bench --decimation [--quick] [--out DIR] [--threads N]\n"
     "       gabarit bench --regression-csv FILE\n\n"
     "Re-measures the thesis's synthetic experiments (section 6.2) in one run: Table 6.1 timings against\n"
     "OpenCV's matchTemplate, the wrong-frame grid over noise x references kept (Figs. 6.16-6.19), the\n"
@@ -383,6 +386,10 @@ constexpr const char* kHelp =
     "                        loop and the OpenCV NCC bank per scene, median and worst scene per half\n"
     "                        (tuning / held out), mean and p99 us/frame; --scenes (default 32, quick 8),\n"
     "                        --frames per scene (default 160, quick 60), --no-peer skips the NCC bank\n"
+    "  --decimation          the decimation policies instead (docs/experiments.md, \"Decimation\"): every\n"
+    "                        policy x 11 keep ratios x 26 noise levels, one-step trials and continuous\n"
+    "                        sequences (500/800 frames), tuning and held-out shapes, bytes and us/frame;\n"
+    "                        writes DIR/decimation.md (quick: 6 noise levels, 4 keeps, 120 frames)\n"
     "  --regression-csv F    write the regression test's small grid to F and exit\n"
     "  --help                show this help\n";
 
@@ -423,6 +430,8 @@ int main(int argc, char** argv) {
         o.microscope = true;
       } else if (a == "--suite") {
         o.suite = true;
+      } else if (a == "--decimation") {
+        o.decimation = true;
       } else if (a == "--scenes") {
         o.scenes = static_cast<std::uint32_t>(count(1, 1000));
       } else if (a == "--no-peer") {
@@ -434,7 +443,8 @@ int main(int argc, char** argv) {
         return 2;
       }
     }
-    if (o.microscope && o.suite) throw gabarit::app::Error("give one of --microscope and --suite");
+    if (o.microscope + o.suite + o.decimation > 1) throw gabarit::app::Error("give one of --microscope, --suite and --decimation");
+    if (o.decimation) return run_decimation_study({o.out, o.quick, o.threads});
     if ((o.scenes || o.no_peer) && !o.suite) throw gabarit::app::Error("--scenes and --no-peer apply to --suite");
     if (o.microscope) return run_microscope(o.out, o.quick);
     if (o.suite) {

@@ -1,5 +1,7 @@
 #include "experiments.hpp"
 
+#include "gabarit/host/table_analysis.hpp"
+
 #include <algorithm>
 #include <atomic>
 #include <limits>
@@ -175,26 +177,30 @@ std::unique_ptr<Estimator> hough(std::vector<std::byte> table, const std::string
 std::vector<GridRow> run_grid(const std::vector<Shape>& shapes, const GridSpec& spec) {
   // Tables first (one per shape and keep), then one job per shape and noise:
   // the job renders its trials once and runs every keep on them.
+  // tables[shape][policy * keeps + keep]
+  const std::size_t variants = spec.policies.size() * spec.keeps.size();
   std::vector<std::vector<std::vector<std::byte>>> tables(shapes.size());
   for (std::size_t s = 0; s < shapes.size(); ++s)
-    for (double keep : spec.keeps) tables[s].push_back(shape_table(shapes[s], keep, spec.seed));
+    for (const host::DecimationPolicy& policy : spec.policies)
+      for (double keep : spec.keeps) tables[s].push_back(shape_table(shapes[s], keep, spec.seed, policy));
 
   const std::size_t jobs = shapes.size() * spec.noises.size();
-  std::vector<GridRow> rows(jobs * spec.keeps.size());
+  std::vector<GridRow> rows(jobs * variants);
   std::atomic<std::size_t> next{0}, done{0};
   std::mutex progress_mutex;
   const auto worker = [&] {
     for (std::size_t job; (job = next++) < jobs;) {
       const std::size_t s = job / spec.noises.size(), n = job % spec.noises.size();
       const auto trials = make_trials(shapes[s], spec.noises[n], spec.frames, spec.seed * 1000003 + job);
-      for (std::size_t k = 0; k < spec.keeps.size(); ++k) {
-        auto estimator = hough(tables[s][k], "hough");
+      for (std::size_t v = 0; v < variants; ++v) {
+        auto estimator = hough(tables[s][v], "hough");
         std::size_t wrong = 0;
         for (const Trial& t : trials) {
           const Point e = estimator->estimate(t);
           wrong += e.x != t.truth.x || e.y != t.truth.y;
         }
-        rows[job * spec.keeps.size() + k] = {shapes[s].name, spec.noises[n], spec.keeps[k], trials.size(), wrong};
+        rows[job * variants + v] = {shapes[s].name, host::describe(spec.policies[v / spec.keeps.size()]), spec.noises[n],
+                                    spec.keeps[v % spec.keeps.size()], trials.size(), wrong};
       }
       const std::size_t d = ++done;
       if (spec.progress) {
@@ -220,39 +226,8 @@ GridSpec regression_grid_spec() {
 }
 
 Robustness stencil_robustness(const TableView& t) {
-  const std::uint32_t n = t.cell_count();
-  std::vector<std::uint32_t> overlap(static_cast<std::size_t>(n) * n, 0);
-  for (std::uint32_t p = 0; p < t.roi_pixels(); ++p) {
-    const std::uint32_t b = t.references_begin(p), e = t.references_begin(p + 1);
-    for (std::uint32_t i = b; i < e; ++i)
-      for (std::uint32_t j = i + 1; j < e; ++j) {
-        ++overlap[std::size_t{t.reference(i)} * n + t.reference(j)];
-        ++overlap[std::size_t{t.reference(j)} * n + t.reference(i)];
-      }
-  }
-  Robustness r;
-  r.min = std::numeric_limits<std::int64_t>::max();
-  double sum = 0;
-  for (std::uint32_t u = 0; u < n; ++u) {
-    std::uint32_t worst = 0;
-    for (std::uint32_t v = 0; v < n; ++v)
-      if (v != u) worst = std::max(worst, overlap[std::size_t{u} * n + v]);
-    const std::int64_t margin = static_cast<std::int64_t>(t.stencil_size(u)) - worst;
-    sum += static_cast<double>(margin);
-    r.min = std::min(r.min, margin);
-  }
-  r.mean = sum / n;
-  return r;
-}
-
-std::vector<std::uint64_t> refs_per_pixel(const TableView& t) {
-  std::vector<std::uint64_t> h;
-  for (std::uint32_t p = 0; p < t.roi_pixels(); ++p) {
-    const std::uint32_t k = t.references_begin(p + 1) - t.references_begin(p);
-    if (h.size() <= k) h.resize(k + 1, 0);
-    ++h[k];
-  }
-  return h;
+  const host::TableAnalysis a = host::analyse_table(t);
+  return {a.robustness_mean, a.robustness_min};
 }
 
 }  // namespace gabarit::bench

@@ -20,6 +20,7 @@
 #include "gabarit/app/image_io.hpp"
 #include "gabarit/host/model.hpp"
 #include "gabarit/host/synth.hpp"
+#include "gabarit/host/table_analysis.hpp"
 #include "gabarit/host/tracking_run.hpp"
 #include "gabarit/host/voter_trials.hpp"
 #include "gabarit/table_view.hpp"
@@ -61,6 +62,7 @@ std::unique_ptr<Estimator> hough(std::vector<std::byte> table, const std::string
 
 struct GridRow {
   std::string shape;
+  std::string policy;  // host::describe(the decimation policy)
   double noise = 0;
   double keep = 1;
   std::size_t frames = 0;
@@ -69,12 +71,14 @@ struct GridRow {
 struct GridSpec {
   std::vector<double> noises;
   std::vector<double> keeps;
+  // Decimation policies compared on the same trials (one by default).
+  std::vector<host::DecimationPolicy> policies = {host::DecimationPolicy{}};
   std::size_t frames = 100;
   std::uint64_t seed = 1;
   unsigned threads = 1;
   std::function<void(std::size_t done, std::size_t total)> progress;
 };
-// Wrong frames of the Hough tracker for every shape x noise x keep. Jobs run
+// Wrong frames of the Hough tracker for every shape x noise x policy x keep. Jobs run
 // on `threads` threads; results do not depend on the thread count.
 std::vector<GridRow> run_grid(const std::vector<Shape>& shapes, const GridSpec& spec);
 
@@ -88,6 +92,6 @@ struct Robustness {
 Robustness stencil_robustness(const TableView& table);
 
 // refs-per-pixel histogram: result[n] = ROI pixels listing n cells.
-std::vector<std::uint64_t> refs_per_pixel(const TableView& table);
+using host::refs_per_pixel;
 
 }  // namespace gabarit::bench

@@ -30,7 +30,7 @@
 #include "gabarit/host/tracking_run.hpp"
 #include "gabarit/tracking_session.hpp"
 #include "scene_io.hpp"
-#include "svg_plot.hpp"
+#include "gabarit/host/svg_plot.hpp"
 
 namespace gabarit::bench {
 namespace {
@@ -271,23 +271,23 @@ void accuracy_table(const Scene& sc, const std::string& dir, std::ostringstream&
         "features once and voting every second one at each placement, unless said) and votes the best three again; "
         "the median is a tracking frame.\n\nPose files: poses-N.csv in table order. Trajectories: trajectory-x.svg, trajectory-theta.svg.\n\n";
   for (const char* axis : {"x", "theta"}) {
-    std::vector<svg::Series> series;
-    svg::Series t{"truth", {}, {}};
+    std::vector<host::svg::Series> series;
+    host::svg::Series t{"truth", {}, {}};
     for (const auto& p : truth) {
       t.x.push_back(p.frame);
       t.y.push_back(axis[0] == 'x' ? p.x : p.theta_deg);
     }
     series.push_back(t);
     for (std::size_t i : {std::size_t{0}, focus_stack_run, ncc_run}) {
-      svg::Series s{runs[i].name, {}, {}};
+      host::svg::Series s{runs[i].name, {}, {}};
       for (const auto& p : runs[i].poses) {
         s.x.push_back(p.frame);
         s.y.push_back(axis[0] == 'x' ? p.x : p.theta_deg);
       }
       series.push_back(s);
     }
-    svg::write((fs::path(dir) / (std::string("trajectory-") + axis + ".svg")).string(),
-               svg::lines(std::string("Tracked and true ") + axis + " (thesis Figs. 6.55-6.59)", "frame",
+    host::svg::write((fs::path(dir) / (std::string("trajectory-") + axis + ".svg")).string(),
+               host::svg::lines(std::string("Tracked and true ") + axis + " (thesis Figs. 6.55-6.59)", "frame",
                           axis[0] == 'x' ? "x (px)" : "theta (deg)", series, false, false));
   }
 

@@ -2,6 +2,8 @@
 #include <unistd.h>
 
 #include <cmath>
+#include <filesystem>
+#include <functional>
 #include <cstdio>
 #include <iostream>
 
@@ -10,7 +12,11 @@
 #include "gabarit/host/hdl_export.hpp"
 #include "gabarit/app/files.hpp"
 #include "gabarit/host/model.hpp"
+#include "gabarit/host/svg_plot.hpp"
+#include "gabarit/host/table_analysis.hpp"
+#include "gabarit/host/table_budget.hpp"
 #include "gabarit/host/table_builder.hpp"
+#include "gabarit/host/template_reduction.hpp"
 #include "gabarit/host/table_inspect.hpp"
 #include "gabarit/features.hpp"
 #include "gabarit/table_view.hpp"
@@ -43,8 +49,27 @@ int tables_build(const std::vector<std::string>& argv) {
              {"--y", "MIN:MAX:CELLS", "y translations, as --x", false, true},
              {"--theta", "MIN:MAX:CELLS", "rotation in degrees, as --x (default 0:0:1)"},
              {"--keep", "RATIO", "fraction of stencil references kept by decimation, (0,1] (default 1)"},
-             {"--decimation", "overlap|uniform", "which references go: the most overlapped first (the thesis's, default)\n"
-              "                          or each with the same probability (for coarse recovery tables at a few percent)"},
+             {"--decimation", "stencil|global|uniform", "which references go (docs/experiments.md, \"Decimation\"): stencil by\n"
+              "                          stencil, the most overlapped pixels first (the thesis's Algorithm 2, default); in one\n"
+              "                          global pass by overlap; or each with the same probability"},
+             {"--weight", "identity|power:K|greedy|rival", "stencil decimation: removal probability against overlap n: n\n"
+              "                          (default), n^K (K = 2, 3), always the most overlapped pixel, or by how alike\n"
+              "                          the stencils sharing the pixel are"},
+             {"--most-overlapping", "", "stencil decimation: remove first the pixels shared with the most overlapping stencil"},
+             {"--spread", "", "stencil decimation: spread removals evenly (a neighbourhood map)"},
+             {"--min-area", "N", "stencil decimation: keep at least N references per stencil (default 0: keep x size, at least 1)"},
+             {"--max-bytes", "N", "build to a budget instead of --keep: the table keeping the most references that fits\n"
+              "                          in N bytes (a flash or BRAM budget); reports its margin of error"},
+             {"--min-margin", "K", "build to a margin instead of --keep: the smallest table whose margin of error (gabarit\n"
+              "                          tables analyse) is at least K pixels; with --max-bytes, refused if it does not fit"},
+             {"--reduce-template", "K", "template reduction first (docs/experiments.md): keep the fewest model points whose\n"
+              "                          characterising value (every other translation puts >= K of them off the model) is\n"
+              "                          at least K; translation spaces only (no --theta)"},
+             {"--reduce-order", "greedy|random", "--reduce-template's search: least useful points first (default), or the best of\n"
+              "                          --reduce-restarts seeded random orders (default 16)"},
+             {"--reduce-restarts", "N", "random orders tried by --reduce-order random"},
+             {"--offsets", "compact|wide", "pixel offsets: compact (format 1.2, default, when smaller) or one u32 per pixel\n"
+              "                          (format 1.0/1.1, for readers older than 1.2)"},
              {"--translations", "inside|enclosing", "integer translations of a cell with non-integer bounds: those inside\n"
               "                          it, else the closest (default), or the smallest enclosing range (docs/tracking.md)"},
              {"--seed", "N", "decimation seed (default 1)"},
@@ -121,18 +146,72 @@ int tables_build(const std::vector<std::string>& argv) {
   } else if (t != "inside") {
     throw app::UsageError("--translations '" + t + "': want inside or enclosing");
   }
-  if (const std::string d = args.get_or("--decimation", "overlap"); d == "uniform") {
-    bo.decimation = host::Decimation::kUniform;
-  } else if (d != "overlap") {
-    throw app::UsageError("--decimation '" + d + "': want overlap or uniform");
-  }
+  bo.decimation.method = host::parse_decimation(args.get_or("--decimation", "stencil"));
+  if (args.has("--weight")) host::parse_removal_weight(args.get("--weight"), bo.decimation);
+  bo.decimation.most_overlapping = args.has("--most-overlapping");
+  bo.decimation.spread = args.has("--spread");
+  bo.decimation.min_area = static_cast<std::uint32_t>(args.integer("--min-area", 0, 0, 1 << 24));
   if (isatty(STDERR_FILENO)) {
     bo.progress = [](std::size_t done, std::size_t total) {
       std::fprintf(stderr, "\rstencils: %zu/%zu cells", done, total);
       if (done == total) std::fputc('\n', stderr);
     };
   }
-  const std::vector<std::byte> bytes = host::build_table(model, bo);
+  if (const std::string offsets = args.get_or("--offsets", "compact"); offsets == "wide") {
+    bo.compact_offsets = false;
+  } else if (offsets != "compact") {
+    throw app::UsageError("--offsets '" + offsets + "': want compact or wide");
+  }
+  if (args.has("--reduce-template")) {
+    if (bo.space.theta.cells != 1 || bo.space.theta.min != 0.0f)
+      throw app::UsageError("--reduce-template works on translation spaces (leave --theta out)");
+    const auto centres = [](const Axis& a) {
+      std::vector<std::int32_t> c;
+      for (std::uint32_t i = 0; i < a.cells; ++i) {
+        const double v = a.cells == 1 ? a.min : a.min + (a.max - a.min) * i / (a.cells - 1);
+        c.push_back(static_cast<std::int32_t>(std::lround(v)));
+      }
+      return c;
+    };
+    const auto k = static_cast<std::uint32_t>(args.integer("--reduce-template", 1, 1, 1 << 20));
+    const std::string order = args.get_or("--reduce-order", "greedy");
+    if (order != "greedy" && order != "random") throw app::UsageError("--reduce-order '" + order + "': want greedy or random");
+    const auto restarts = static_cast<std::uint32_t>(args.integer("--reduce-restarts", 16, 1, 10000));
+    const std::vector<host::Point> shifts = host::translation_differences(centres(bo.space.x), centres(bo.space.y));
+    for (std::size_t d = 0; d < model.depths.size(); ++d) {
+      const host::ReductionResult r = host::reduce_template(model.depths[d], shifts, k,
+                                                            order == "greedy" ? host::ReductionOrder::kGreedy : host::ReductionOrder::kRandom,
+                                                            restarts, bo.seed + d);
+      std::fprintf(stderr, "template reduction: depth %zu, %zu -> %zu points, characterising value %u (the whole model's: %u)\n", d,
+                   model.depths[d].size(), r.points.size(), r.characterising_value, r.full_value);
+      model.depths[d] = r.points;
+    }
+  } else if (args.has("--reduce-order") || args.has("--reduce-restarts")) {
+    throw app::UsageError("--reduce-order and --reduce-restarts go with --reduce-template");
+  }
+  host::Budget budget;
+  if (args.has("--max-bytes")) budget.max_bytes = static_cast<std::uint64_t>(args.integer("--max-bytes", 0, 1, table_format::kMaxTableBytes));
+  if (args.has("--min-margin")) budget.min_margin = static_cast<std::uint32_t>(args.integer("--min-margin", 0, 1, 1 << 24));
+  const bool budgeted = budget.max_bytes > 0 || budget.min_margin > 0;
+  if (budgeted && args.has("--keep")) throw app::UsageError("--keep and a budget (--max-bytes, --min-margin) exclude each other");
+  std::vector<std::byte> bytes;
+  if (budgeted) {
+    host::BudgetReport report;
+    std::fprintf(stderr, "searching the keep ratio for the budget...\n");
+    bytes = host::build_table_to_budget(model, bo, budget, report);
+    std::fprintf(stderr, "budget: keep %.4g%%, %zu bytes", report.keep * 100, report.bytes);
+    if (budget.max_bytes) std::fprintf(stderr, " (%.1f%% of %llu)", 100.0 * static_cast<double>(report.bytes) / static_cast<double>(budget.max_bytes),
+                                        static_cast<unsigned long long>(budget.max_bytes));
+    std::fprintf(stderr, ", margin of error %u px (%s), %zu tables tried\n", report.margin,
+                 report.margin_exact ? "exact: 1-pixel translation cells" : "estimated at the cell centres", report.builds);
+    if (report.margin_exact && model.detector.kind == table_format::DetectorKind::kBinary && model.depths.size() == 1) {
+      const double tolerance = host::measured_noise_tolerance(bytes, model.depths[0], 50, bo.seed);
+      if (tolerance < 0) std::fprintf(stderr, "noise tolerance: wrong even without noise (50 one-step trials)\n");
+      else std::fprintf(stderr, "noise tolerance: no wrong frame in 50 one-step trials per level up to %.0f%% salt-and-pepper\n", tolerance * 100);
+    }
+  } else {
+    bytes = host::build_table(model, bo);
+  }
   TableView view;
   if (const Status s = TableView::open(bytes, view); s != Status::kOk) {
     throw app::Error(std::string("internal error: built table does not validate: ") + status_name(s));
@@ -141,6 +220,56 @@ int tables_build(const std::vector<std::string>& argv) {
   std::fprintf(stderr, "%s: %zu bytes, %u cells, %u references (%u-byte), ROI %ux%u\n", args.get("-o").c_str(), bytes.size(),
                view.cell_count(), view.reference_count(), unsigned{view.reference_bytes()}, unsigned{view.roi_width()},
                unsigned{view.roi_height()});
+  return 0;
+}
+
+int tables_analyse(const std::vector<std::string>& argv) {
+  app::Args args("tables analyse", "TABLE [-o ANALYSIS.json] [--plots DIR]",
+                 "What the table withstands (docs/table-format.md, \"Analysis\"): every stencil's margin of error (the fewest\n"
+                 "flipped ROI pixels that make another cell win; exact for 1-pixel translation cells, else estimated at\n"
+                 "each cell's centre), the estimator's margin (the minimum), the robustness indicators (size minus the\n"
+                 "largest overlap), the refs-per-pixel histogram with cumulative and vote-weighted columns, and the\n"
+                 "characterising value of random subsets of the model's points. JSON to stdout or -o; SVG plots with --plots.",
+                 {{"-o", "FILE", "write the JSON here instead of stdout"},
+                  {"--plots", "DIR", "write DIR/overlap_map.svg (the weakest stencil) and DIR/margins.svg"},
+                  {"--samples", "N", "random subsets per size for the characterising value (default 200; 0 skips it)"},
+                  {"--seed", "N", "seed of those subsets (default 1)"}},
+                 "TABLE");
+  if (!args.parse(argv)) return 0;
+  if (args.positionals().size() != 1) throw app::UsageError("give exactly one TABLE");
+  const auto samples = static_cast<std::uint32_t>(args.integer("--samples", 200, 0, 100000));
+  const auto seed = static_cast<std::uint64_t>(args.integer("--seed", 1, 0, INT64_MAX));
+  const app::TableFile file(args.positionals()[0]);
+  const TableView& view = file.view();
+  std::function<void(std::size_t, std::size_t)> progress;
+  if (isatty(STDERR_FILENO)) {
+    progress = [](std::size_t done, std::size_t total) {
+      std::fprintf(stderr, "\rmargins: %zu/%zu cells", done, total);
+      if (done == total) std::fputc('\n', stderr);
+    };
+  }
+  const host::TableAnalysis analysis = host::analyse_table(view, progress);
+  std::vector<host::Characterisation> chars;
+  if (samples > 0) {
+    std::vector<host::Point> model;
+    for (std::uint32_t i = 0; i < view.model_point_count(0); ++i) model.push_back({view.model_point(i).x, view.model_point(i).y});
+    std::vector<std::uint32_t> sizes;
+    for (std::uint32_t k = 1; k < model.size(); k = k < 4 ? k + 1 : k * 2) sizes.push_back(k);
+    sizes.push_back(static_cast<std::uint32_t>(model.size()));
+    chars = host::characterise(model, host::table_shifts(view), sizes, samples, seed);
+  }
+  const std::string json = host::analysis_json(view, analysis, chars);
+  if (args.has("--plots")) {
+    const std::string dir = args.get("--plots");
+    std::filesystem::create_directories(dir);
+    host::svg::write(dir + "/overlap_map.svg", host::overlap_map_svg(view, analysis.weakest_cell));
+    host::svg::write(dir + "/margins.svg", host::margins_svg(analysis));
+  }
+  if (args.has("-o")) app::write_file(args.get("-o"), json);
+  else std::cout << json;
+  std::fprintf(stderr, "margin of error %u px (%s; weakest cell %u), mean %.1f; robustness mean %.1f, min %lld\n", analysis.overall_margin,
+               analysis.exact ? "exact" : "estimated at cell centres", analysis.weakest_cell, analysis.mean_margin, analysis.robustness_mean,
+               static_cast<long long>(analysis.robustness_min));
   return 0;
 }
 

@@ -29,7 +29,7 @@ int track(const std::vector<std::string>& argv) {
              {"--plain", "", "the thesis's loop: the best cell of each frame, no filter, refinement, recovery or\n"
               "                          focus stack (add --motion-filter, --refine or --recover to it one by one)"},
              {"--binary", "", "use the binary detector on frames whatever the table says"},
-             {"--voter", "auto|csr|dense", "voting method (default auto: dense when the table has <= 1024 cells); same results"},
+             {"--voter", "auto|csr|dense", "voting method (default auto: the one dense_voter.hpp's cost model expects faster); same results"},
              {"--motion-filter", "", "with --plain: predict the ROI, gate candidates, grade confidence (default on)"},
              {"--refine", "", "with --plain: sub-cell x, y, theta from the neighbouring cells' scores (default on)"},
              {"--recover", "", "with --plain: once lost, search around the last confident pose (default on)"},

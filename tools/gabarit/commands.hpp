@@ -9,6 +9,7 @@ namespace gabarit::cli {
 
 int tables_build(const std::vector<std::string>& args);
 int tables_inspect(const std::vector<std::string>& args);
+int tables_analyse(const std::vector<std::string>& args);
 int tables_export_hdl(const std::vector<std::string>& args);
 int synth(const std::vector<std::string>& args);
 int track(const std::vector<std::string>& args);

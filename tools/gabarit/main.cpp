@@ -21,6 +21,7 @@ constexpr const char* kUsage =
     "commands:\n"
     "  tables build     build a stencil look-up table from a model and a motion space\n"
     "  tables inspect   validate a table and print it as JSON\n"
+    "  tables analyse   margins of error, robustness and overlap of a table (JSON, SVG)\n"
     "  tables export-hdl  memory images and a package for the hardware voter\n"
     "  synth            write a synthetic sequence with ground truth\n"
     "  track            track a model through a sequence\n"
@@ -55,14 +56,15 @@ int main(int argc, char** argv) {
     args.erase(args.begin());
     if (command == "bench") return exec_bench(argv);
     if (command == "tables") {
-      if (args.empty()) throw gabarit::app::UsageError("tables: want 'build', 'inspect' or 'export-hdl'");
+      if (args.empty()) throw gabarit::app::UsageError("tables: want 'build', 'inspect', 'analyse' or 'export-hdl'");
       const std::string sub = args[0];
       args.erase(args.begin());
       command += " " + sub;
       if (sub == "build") return gabarit::cli::tables_build(args);
       if (sub == "inspect") return gabarit::cli::tables_inspect(args);
+      if (sub == "analyse" || sub == "analyze") return gabarit::cli::tables_analyse(args);
       if (sub == "export-hdl") return gabarit::cli::tables_export_hdl(args);
-      throw gabarit::app::UsageError("tables: unknown subcommand '" + sub + "' (want build, inspect or export-hdl)");
+      throw gabarit::app::UsageError("tables: unknown subcommand '" + sub + "' (want build, inspect, analyse or export-hdl)");
     }
     if (command == "synth") return gabarit::cli::synth(args);
     if (command == "track") return gabarit::cli::track(args);

@@ -37,6 +37,30 @@ constexpr std::size_t dense_mask_words(std::uint32_t roi_pixels, std::uint32_t c
 // 16 count planes plus the carry-save adders' ones, twos and fours.
 constexpr std::size_t dense_scratch_words(std::uint32_t cells) noexcept { return 19 * dense_words_per_pixel(cells); }
 
+// The cost model that picks a voter per table (gabarit track --voter auto,
+// gabarit-board, the firmware): per feature, the CSR voter costs about
+// 9 + 1.55 r ns for r references per feature pixel (a fixed part: the
+// list's bounds and a branch; then a counter per reference), the dense voter
+// about 1 + 2.6 w ns for w mask words (cells / 64, rounded up), whatever the
+// references. r is estimated as references / ROI pixels, which is what
+// uniformly spread clutter votes (features on the object vote a little more).
+// Fitted on a 2-core x86-64 at 20% salt-and-pepper noise against 121 to 847
+// cells and 0.2 to 59 references per feature (gabarit bench --decimation,
+// "Voting time"); both voters give the same counters, so a wrong guess costs
+// time only. Dense pays off when 2.6 w < 8 + 1.55 r, in integers below.
+constexpr bool dense_voter_pays_off(std::uint32_t cells, std::uint32_t roi_pixels, std::uint32_t references) noexcept {
+  if (cells == 0 || cells > kDenseMaxCells || roi_pixels == 0) return false;
+  const std::uint64_t words = dense_words_per_pixel(cells);
+  return 52 * words * roi_pixels < 160ull * roi_pixels + 31ull * references;
+}
+inline bool dense_voter_pays_off(const TableView& table) noexcept {
+  return dense_voter_pays_off(table.cell_count(), table.roi_pixels(), table.reference_count());
+}
+static_assert(dense_voter_pays_off(121, 3600, 24000) && dense_voter_pays_off(121, 3600, 100),
+              "two mask words: dense whatever the references");
+static_assert(!dense_voter_pays_off(605, 3600, 14000) && dense_voter_pays_off(605, 3600, 150000),
+              "ten words: CSR for a decimated table, dense at full stencils");
+
 // Expands the table's lists into masks. kInvalidArgument when the table has
 // more than kDenseMaxCells cells, kBufferTooSmall for a short buffer.
 Status build_dense_masks(const TableView& table, std::span<std::uint64_t> masks) noexcept;

@@ -10,10 +10,22 @@ namespace gabarit::table_format {
 
 inline constexpr char kMagic[8] = {'G', 'B', 'R', 'T', 'L', 'U', 'T', '\0'};
 inline constexpr std::uint16_t kVersionMajor = 1;
-// 1.1 added the optional model-images section (kFlagModelImages); a table
-// without it is written as 1.0, byte for byte as before.
-inline constexpr std::uint16_t kVersionMinor = 1;
-inline constexpr std::uint32_t kFlagModelImages = 1u;  // the only flag; others must be 0
+// 1.1 added the optional model-images section (kFlagModelImages); 1.2 the
+// compact pixel offsets (kFlagCompactOffsets). A table is written with the
+// lowest minor version that holds what it uses: without either, as 1.0,
+// byte for byte as before.
+inline constexpr std::uint16_t kVersionMinor = 2;
+inline constexpr std::uint32_t kFlagModelImages = 1u;
+inline constexpr std::uint32_t kFlagCompactOffsets = 2u;
+inline constexpr std::uint32_t kKnownFlags = kFlagModelImages | kFlagCompactOffsets;  // others must be 0
+
+// Compact pixel offsets (1.2): the ROI's pixels in blocks of 2^block_log2;
+// a u32 base per block (the first reference of the block's first pixel),
+// then per pixel (and one past the last) a u8 or u16 delta from its block's
+// base. begin(p) = base[p >> block_log2] + delta[p]. Bytes fall with the
+// references, since deltas are narrow where pixels hold few.
+inline constexpr std::uint8_t kMinOffsetBlockLog2 = 2;
+inline constexpr std::uint8_t kMaxOffsetBlockLog2 = 10;
 
 inline constexpr std::uint32_t kHeaderBytes = 160;
 inline constexpr std::uint32_t kCellDescriptorBytes = 32;
@@ -98,7 +110,9 @@ inline constexpr std::size_t kReferencesOffset = 128;  // u32
 inline constexpr std::size_t kModelCountsOffset = 132; // u32: depth_count x u32
 inline constexpr std::size_t kModelPointsOffset = 136; // u32: model_point_count x (i16, i16)
 inline constexpr std::size_t kModelImagesOffset = 140; // u32 (v1.1): depth_count x model_width x model_height u8, 0 if absent
-inline constexpr std::size_t kReserved144 = 144;       // 16 bytes, must be 0
+inline constexpr std::size_t kOffsetDeltaBytes = 144;  // u8 (v1.2, compact offsets): 1 or 2; else 0
+inline constexpr std::size_t kOffsetBlockLog2 = 145;   // u8 (v1.2, compact offsets): 2..10; else 0
+inline constexpr std::size_t kReserved146 = 146;       // 14 bytes, must be 0
 }  // namespace offset
 
 // Cell descriptor field offsets (bytes from the start of the descriptor).
@@ -133,7 +147,19 @@ struct LayoutCounts {
   std::uint16_t depth_count = 0;
   std::uint32_t model_point_count = 0;
   std::uint32_t model_image_bytes = 0;  // 0: no model-images section
+  std::uint8_t offset_delta_bytes = 0;  // 0: u32 offsets; 1, 2: compact offsets (v1.2)
+  std::uint8_t offset_block_log2 = 0;   // compact offsets: pixels per block, log2
 };
+
+// Blocks of compact offsets covering pixels 0..roi_pixels (one past the last).
+constexpr std::uint32_t offset_block_count(std::uint32_t roi_pixels, std::uint8_t block_log2) noexcept {
+  return (roi_pixels >> block_log2) + 1;
+}
+// Bytes of the pixel-offsets section.
+constexpr std::uint32_t pixel_offsets_bytes(const LayoutCounts& n) noexcept {
+  if (n.offset_delta_bytes == 0) return (n.roi_pixels + 1) * 4;
+  return align_up(offset_block_count(n.roi_pixels, n.offset_block_log2) * 4) + (n.roi_pixels + 1) * n.offset_delta_bytes;
+}
 // Where each section starts, and the file's size: the sections follow the
 // header in this order, each 8-byte aligned, with no gaps beyond alignment
 // (docs/table-format.md). The one description of the layout: the reader
@@ -142,7 +168,7 @@ struct LayoutCounts {
 // are within the kMax* limits, which keeps every sum inside 32 bits.
 struct Layout {
   std::uint32_t cells = 0;          // cell descriptors
-  std::uint32_t pixel_offsets = 0;  // CSR offsets, roi_pixels + 1 x u32
+  std::uint32_t pixel_offsets = 0;  // CSR offsets: roi_pixels + 1 x u32, or compact (bases, then deltas)
   std::uint32_t references = 0;     // reference_count x reference_bytes
   std::uint32_t model_counts = 0;   // depth_count x u32
   std::uint32_t model_points = 0;   // model_point_count x (i16, i16)
@@ -153,7 +179,7 @@ constexpr Layout layout_of(const LayoutCounts& n) noexcept {
   Layout l;
   l.cells = kHeaderBytes;
   l.pixel_offsets = align_up(l.cells + n.cell_count * kCellDescriptorBytes);
-  l.references = align_up(l.pixel_offsets + (n.roi_pixels + 1) * 4);
+  l.references = align_up(l.pixel_offsets + pixel_offsets_bytes(n));
   l.model_counts = align_up(l.references + n.reference_count * n.reference_bytes);
   l.model_points = align_up(l.model_counts + std::uint32_t{n.depth_count} * 4);
   l.model_images = align_up(l.model_points + n.model_point_count * kModelPointBytes);

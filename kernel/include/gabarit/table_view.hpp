@@ -48,6 +48,25 @@ struct ModelPoint {
   std::int16_t y = 0;
 };
 
+// Readers of the pixel offsets (CSR row starts) in each encoding of
+// docs/table-format.md; begin(p) is the index of pixel p's first reference,
+// begin(p + 1) one past its last. The voters are templates over them, so
+// each encoding's hot loop is compiled on its own.
+struct WideOffsets {
+  const std::byte* offsets;
+  std::uint32_t begin(std::size_t pixel) const noexcept { return load_le<std::uint32_t>(offsets + pixel * 4); }
+};
+template <class Delta>
+struct CompactOffsets {
+  const std::byte* bases;
+  const std::byte* deltas;
+  unsigned block_log2;
+  std::uint32_t begin(std::size_t pixel) const noexcept {
+    return load_le<std::uint32_t>(bases + (pixel >> block_log2) * 4) +
+           std::uint32_t{load_le<Delta>(deltas + pixel * sizeof(Delta))};
+  }
+};
+
 // CRC-32 of a table: every byte except the 4-byte CRC field itself (so a
 // flipped bit anywhere, header included, is caught). Precondition:
 // table.size() >= table_format::kHeaderBytes.
@@ -100,15 +119,32 @@ class TableView {
                                   table_format::cell_offset::kStencilSize);
   }
 
-  // CSR access. Precondition: pixel < roi_pixels(); references of the pixel are
-  // indices [references_begin(pixel), references_begin(pixel + 1)).
+  // CSR access. Precondition: pixel <= roi_pixels(); references of pixel p are
+  // indices [references_begin(p), references_begin(p + 1)).
   std::uint32_t references_begin(std::uint32_t pixel) const noexcept {
-    return load_le<std::uint32_t>(pixel_offsets_ + std::size_t{pixel} * 4);
+    switch (offset_delta_bytes_) {
+      case 0: return WideOffsets{pixel_offsets_}.begin(pixel);
+      case 1: return CompactOffsets<std::uint8_t>{pixel_offsets_, offset_deltas_, offset_block_log2_}.begin(pixel);
+      default: return CompactOffsets<std::uint16_t>{pixel_offsets_, offset_deltas_, offset_block_log2_}.begin(pixel);
+    }
   }
   // Precondition: index < reference_count().
   std::uint32_t reference(std::uint32_t index) const noexcept;
-  const std::byte* pixel_offsets_data() const noexcept { return pixel_offsets_; }
   const std::byte* references_data() const noexcept { return references_; }
+  // The offsets' encoding: 0 for one u32 per pixel (1.0, 1.1), else the
+  // compact deltas' width (1.2), with blocks of 2^offset_block_log2() pixels.
+  std::uint8_t offset_delta_bytes() const noexcept { return offset_delta_bytes_; }
+  std::uint8_t offset_block_log2() const noexcept { return offset_block_log2_; }
+  // Calls f with the reader of this table's offset encoding (WideOffsets or
+  // CompactOffsets<u8 or u16>) and returns what f returns.
+  template <class F>
+  decltype(auto) with_offsets(F&& f) const noexcept {
+    switch (offset_delta_bytes_) {
+      case 0: return f(WideOffsets{pixel_offsets_});
+      case 1: return f(CompactOffsets<std::uint8_t>{pixel_offsets_, offset_deltas_, offset_block_log2_});
+      default: return f(CompactOffsets<std::uint16_t>{pixel_offsets_, offset_deltas_, offset_block_log2_});
+    }
+  }
 
   // Model points of one focus-stack depth, relative to the reference point.
   // Precondition: depth < depth_count(), i < model_point_count(depth).
@@ -137,7 +173,8 @@ class TableView {
 
   const std::byte* base_ = nullptr;
   const std::byte* cells_ = nullptr;
-  const std::byte* pixel_offsets_ = nullptr;
+  const std::byte* pixel_offsets_ = nullptr;  // u32 offsets, or the compact offsets' bases
+  const std::byte* offset_deltas_ = nullptr;  // compact offsets only
   const std::byte* references_ = nullptr;
   const std::byte* model_counts_ = nullptr;
   const std::byte* model_points_ = nullptr;
@@ -154,6 +191,8 @@ class TableView {
   std::uint16_t detector_threshold_ = 0;
   std::uint16_t depth_count_ = 0;
   std::uint8_t reference_bytes_ = 0;
+  std::uint8_t offset_delta_bytes_ = 0;
+  std::uint8_t offset_block_log2_ = 0;
   table_format::DetectorKind detector_kind_ = table_format::DetectorKind::kBinary;
 };
 

@@ -78,7 +78,7 @@ app::GrayImage render_frame(const SynthOptions& o, std::int32_t x, std::int32_t 
   return image;
 }
 
-std::vector<TruthRow> write_synthetic_sequence(const SynthOptions& o, const std::string& dir) {
+std::vector<TruthRow> synthetic_trajectory(const SynthOptions& o) {
   if (o.shape.empty()) throw app::Error("synth: empty shape");
   if (o.frames == 0 || o.frames > 1000000) throw app::Error("synth: --frames must be in 1..1000000");
   if (o.max_step < 0 || o.max_step > 1000) throw app::Error("synth: --max-step must be in 0..1000");
@@ -92,11 +92,6 @@ std::vector<TruthRow> write_synthetic_sequence(const SynthOptions& o, const std:
   const std::int64_t lo_x = -std::int64_t{min_x}, hi_x = std::int64_t{o.width} - 1 - max_x;
   const std::int64_t lo_y = -std::int64_t{min_y}, hi_y = std::int64_t{o.height} - 1 - max_y;
   if (lo_x > hi_x || lo_y > hi_y) throw app::Error("synth: the shape does not fit in a " + std::to_string(o.width) + "x" + std::to_string(o.height) + " image");
-
-  std::filesystem::create_directories(dir);
-  app::Y4mWriter video(dir + "/frames.y4m", o.width, o.height);
-  std::ostringstream gt;
-  gt << "frame,x,y,theta_deg,depth,visible\n";
 
   Rng motion(o.seed);
   std::int32_t x = static_cast<std::int32_t>(std::clamp<std::int64_t>(o.width / 2, lo_x, hi_x));
@@ -124,9 +119,29 @@ std::vector<TruthRow> write_synthetic_sequence(const SynthOptions& o, const std:
       x = static_cast<std::int32_t>(std::clamp<std::int64_t>(nx, lo_x, hi_x));
       y = static_cast<std::int32_t>(std::clamp<std::int64_t>(ny, lo_y, hi_y));
     }
-    video.write(render_frame(o, x, y, o.seed ^ (0xA5A5A5A5ull + 0x100000001B3ull * (f + 1))));
-    gt << f << ',' << x << ',' << y << ",0,0,1\n";
     truth.push_back({f, x, y});
+  }
+  return truth;
+}
+
+std::uint64_t synthetic_frame_seed(const SynthOptions& o, std::uint32_t frame) {
+  return o.seed ^ (0xA5A5A5A5ull + 0x100000001B3ull * (frame + 1));
+}
+
+std::vector<TruthRow> write_synthetic_sequence(const SynthOptions& o, const std::string& dir) {
+  const std::vector<TruthRow> truth = synthetic_trajectory(o);
+  std::int32_t min_x = INT32_MAX, min_y = INT32_MAX, max_x = INT32_MIN, max_y = INT32_MIN;
+  for (const Point& p : o.shape) {
+    min_x = std::min(min_x, p.x); max_x = std::max(max_x, p.x);
+    min_y = std::min(min_y, p.y); max_y = std::max(max_y, p.y);
+  }
+  std::filesystem::create_directories(dir);
+  app::Y4mWriter video(dir + "/frames.y4m", o.width, o.height);
+  std::ostringstream gt;
+  gt << "frame,x,y,theta_deg,depth,visible\n";
+  for (const TruthRow& t : truth) {
+    video.write(render_frame(o, t.x, t.y, synthetic_frame_seed(o, t.frame)));
+    gt << t.frame << ',' << t.x << ',' << t.y << ",0,0,1\n";
   }
   video.close();
   app::write_file(dir + "/gt.csv", gt.str());

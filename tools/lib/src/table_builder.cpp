@@ -24,6 +24,26 @@ void put_axis(std::byte* at, const Axis& a) {
   store_le<std::uint32_t>(at + 8, a.cells);
 }
 
+// The compact offset encoding (format 1.2) with the fewest bytes: block
+// sizes 2^2..2^10 pixels, u8 deltas where every block's span fits them, else
+// u16. Leaves the counts at u32 offsets when no compact encoding is smaller.
+void choose_offset_encoding(const std::vector<std::uint32_t>& offsets, tf::LayoutCounts& counts) {
+  std::uint32_t best = tf::pixel_offsets_bytes(counts);
+  for (std::uint8_t log2 = tf::kMinOffsetBlockLog2; log2 <= tf::kMaxOffsetBlockLog2; ++log2) {
+    std::uint32_t widest = 0;
+    for (std::size_t p = 0; p < offsets.size(); ++p) widest = std::max(widest, offsets[p] - offsets[(p >> log2) << log2]);
+    if (widest > 0xFFFF) continue;
+    tf::LayoutCounts c = counts;
+    c.offset_delta_bytes = widest <= 0xFF ? 1 : 2;
+    c.offset_block_log2 = log2;
+    if (tf::pixel_offsets_bytes(c) < best) {
+      best = tf::pixel_offsets_bytes(c);
+      counts.offset_delta_bytes = c.offset_delta_bytes;
+      counts.offset_block_log2 = log2;
+    }
+  }
+}
+
 }  // namespace
 
 Stencils compute_stencils(const ModelStack& model, const BuildOptions& options) {
@@ -119,15 +139,16 @@ Stencils compute_stencils(const ModelStack& model, const BuildOptions& options) 
 
 CsrLists assemble_csr(Stencils& stencils, const BuildOptions& options) {
   const std::uint32_t pixels = std::uint32_t{stencils.roi_width} * stencils.roi_height;
-  // Overlap n(p) and decimation, in (cell, pixel) order.
-  std::vector<std::uint32_t> cover(pixels, 0);
-  for (const auto& s : stencils.points)
-    for (const Point& p : s) ++cover[stencils.pixel_of(p)];
-  std::vector<std::uint32_t> overlap;
-  overlap.reserve(stencils.references);
-  for (const auto& s : stencils.points)
-    for (const Point& p : s) overlap.push_back(cover[stencils.pixel_of(p)]);
-  const std::vector<bool> kept = decimate(overlap, options.keep, options.seed, options.decimation);
+  // Decimation, in (cell, pixel) order.
+  StencilPixels pixel_lists;
+  pixel_lists.roi_width = stencils.roi_width;
+  pixel_lists.roi_height = stencils.roi_height;
+  pixel_lists.cells.resize(stencils.points.size());
+  for (std::size_t c = 0; c < stencils.points.size(); ++c) {
+    pixel_lists.cells[c].reserve(stencils.points[c].size());
+    for (const Point& p : stencils.points[c]) pixel_lists.cells[c].push_back(stencils.pixel_of(p));
+  }
+  const std::vector<bool> kept = decimate(pixel_lists, options.keep, options.seed, options.decimation);
 
   // CSR: count per pixel, prefix sums, then fill in increasing cell order so
   // each pixel's list is strictly increasing.
@@ -174,14 +195,18 @@ std::vector<std::byte> serialise_table(const ModelStack& model, const BuildOptio
       throw app::Error("table: the model images take " + std::to_string(image_bytes) + " bytes, above the format's " +
                        std::to_string(tf::kMaxModelImageBytes) + "; build with --no-model-images");
   }
-  const tf::Layout layout = tf::layout_of({cell_count, pixels, references, ref_bytes, static_cast<std::uint16_t>(model.depths.size()),
-                                           model_points, static_cast<std::uint32_t>(image_bytes)});
+  tf::LayoutCounts counts{cell_count, pixels, references, ref_bytes, static_cast<std::uint16_t>(model.depths.size()),
+                          model_points, static_cast<std::uint32_t>(image_bytes)};
+  if (options.compact_offsets) choose_offset_encoding(csr.offsets, counts);
+  const bool compact = counts.offset_delta_bytes != 0;
+  const tf::Layout layout = tf::layout_of(counts);
 
   std::vector<std::byte> out(layout.file_bytes, std::byte{0});
   std::byte* b = out.data();
   std::memcpy(b + off::kMagic, tf::kMagic, sizeof tf::kMagic);
   store_le<std::uint16_t>(b + off::kVersionMajor, tf::kVersionMajor);
-  store_le<std::uint16_t>(b + off::kVersionMinor, images ? std::uint16_t{1} : std::uint16_t{0});  // 1.0 without images
+  // The lowest minor version that holds what the table uses.
+  store_le<std::uint16_t>(b + off::kVersionMinor, compact ? std::uint16_t{2} : images ? std::uint16_t{1} : std::uint16_t{0});
   store_le<std::uint32_t>(b + off::kHeaderBytes, tf::kHeaderBytes);
   store_le<std::uint32_t>(b + off::kFileBytes, layout.file_bytes);
   store_le<std::uint32_t>(b + off::kCellCount, cell_count);
@@ -212,8 +237,12 @@ std::vector<std::byte> serialise_table(const ModelStack& model, const BuildOptio
   store_le<std::uint32_t>(b + off::kReferencesOffset, layout.references);
   store_le<std::uint32_t>(b + off::kModelCountsOffset, layout.model_counts);
   store_le<std::uint32_t>(b + off::kModelPointsOffset, layout.model_points);
+  store_le<std::uint32_t>(b + off::kFlags, (images ? tf::kFlagModelImages : 0u) | (compact ? tf::kFlagCompactOffsets : 0u));
+  if (compact) {
+    store_le<std::uint8_t>(b + off::kOffsetDeltaBytes, counts.offset_delta_bytes);
+    store_le<std::uint8_t>(b + off::kOffsetBlockLog2, counts.offset_block_log2);
+  }
   if (images) {
-    store_le<std::uint32_t>(b + off::kFlags, tf::kFlagModelImages);
     store_le<std::uint32_t>(b + off::kModelImagesOffset, layout.model_images);
     for (std::size_t d = 0; d < model.images.size(); ++d)
       std::memcpy(b + layout.model_images + d * model.images[d].size(), model.images[d].data(), model.images[d].size());
@@ -231,7 +260,18 @@ std::vector<std::byte> serialise_table(const ModelStack& model, const BuildOptio
     store_le<std::uint16_t>(d + co::kDepth, cells[c].depth);
     store_le<std::uint32_t>(d + co::kStencilSize, cells[c].stencil_size);
   }
-  for (std::uint32_t p = 0; p <= pixels; ++p) store_le<std::uint32_t>(b + layout.pixel_offsets + std::size_t{p} * 4, csr.offsets[p]);
+  if (compact) {
+    const unsigned log2 = counts.offset_block_log2;
+    std::byte* deltas = b + layout.pixel_offsets + tf::align_up(tf::offset_block_count(pixels, counts.offset_block_log2) * 4);
+    for (std::uint32_t p = 0; p <= pixels; ++p) {
+      const std::uint32_t base = csr.offsets[(p >> log2) << log2];
+      if ((p & ((1u << log2) - 1)) == 0) store_le<std::uint32_t>(b + layout.pixel_offsets + std::size_t{p >> log2} * 4, base);
+      if (counts.offset_delta_bytes == 1) store_le<std::uint8_t>(deltas + p, static_cast<std::uint8_t>(csr.offsets[p] - base));
+      else store_le<std::uint16_t>(deltas + std::size_t{p} * 2, static_cast<std::uint16_t>(csr.offsets[p] - base));
+    }
+  } else {
+    for (std::uint32_t p = 0; p <= pixels; ++p) store_le<std::uint32_t>(b + layout.pixel_offsets + std::size_t{p} * 4, csr.offsets[p]);
+  }
   for (std::uint32_t r = 0; r < references; ++r) {
     std::byte* d = b + layout.references + std::size_t{r} * ref_bytes;
     switch (ref_bytes) {

@@ -37,7 +37,7 @@ std::vector<Trial> make_trials(const Shape& shape, double noise, std::size_t cou
   return trials;
 }
 
-std::vector<std::byte> shape_table(const Shape& shape, double keep, std::uint64_t seed) {
+std::vector<std::byte> shape_table(const Shape& shape, double keep, std::uint64_t seed, const DecimationPolicy& policy) {
   ModelStack model;
   model.depths.push_back(shape.points);
   model.detector.kind = table_format::DetectorKind::kBinary;
@@ -47,6 +47,7 @@ std::vector<std::byte> shape_table(const Shape& shape, double keep, std::uint64_
   o.space.theta = parse_axis("0:0:1", "theta");
   o.keep = keep;
   o.seed = seed;
+  o.decimation = policy;
   return build_table(model, o);
 }
 

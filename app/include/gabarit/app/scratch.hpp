@@ -16,8 +16,9 @@
 namespace gabarit::app {
 
 // Which voter track_step uses: the CSR lists, word-parallel masks
-// (dense_voter.hpp; tables of at most kDenseMaxCells cells), or dense when
-// the table allows it. Results are bit-identical; only the time differs.
+// (dense_voter.hpp; tables of at most kDenseMaxCells cells), or the one the
+// cost model expects to be faster (dense_voter_pays_off). Results are
+// bit-identical; only the time differs.
 enum class VoterChoice { kAuto, kCsr, kDense };
 
 // Scratch for track_step on one table. Throws app::Error when kDense is asked

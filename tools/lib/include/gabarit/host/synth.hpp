@@ -46,6 +46,13 @@ void fit_image_to_shape(SynthOptions& options);
 // `--model-points model.csv`). Returns the ground truth.
 std::vector<TruthRow> write_synthetic_sequence(const SynthOptions& options, const std::string& dir);
 
+// The sequence's positions, one per frame (write_synthetic_sequence's), and
+// the seed of frame f's noise: render_frame(o, x, y, synthetic_frame_seed(o, f))
+// is the sequence's frame f, so a study can render frames as it goes.
+// Throws app::Error for options out of range.
+std::vector<TruthRow> synthetic_trajectory(const SynthOptions& options);
+std::uint64_t synthetic_frame_seed(const SynthOptions& options, std::uint32_t frame);
+
 // Renders one frame: shape at (x, y), then noise from `rng`-seeded draws.
 app::GrayImage render_frame(const SynthOptions& options, std::int32_t x, std::int32_t y, std::uint64_t frame_seed);
 

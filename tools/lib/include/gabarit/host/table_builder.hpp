@@ -19,12 +19,15 @@ namespace gabarit::host {
 struct BuildOptions {
   StateSpace space;      // space.depths is taken from the model
   double keep = 1.0;     // fraction of references kept by decimation
-  Decimation decimation = Decimation::kOverlap;
+  DecimationPolicy decimation;  // which references go when keep < 1
   TranslationPolicy translations = TranslationPolicy::kInsideElseClosest;
   std::uint64_t seed = 1;
   // Store the model's images (when it has them) in the table: the focus
   // stack depth and angle by intensity compare (table format 1.1).
   bool store_model_images = true;
+  // Write the pixel offsets compactly (format 1.2: per-block bases and u8 or
+  // u16 deltas) when that is smaller; false keeps one u32 per pixel (1.0/1.1).
+  bool compact_offsets = true;
   // Called now and then with (cells done, cells total) while stencils are built.
   std::function<void(std::size_t, std::size_t)> progress;
 };

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "gabarit/app/image_io.hpp"
+#include "gabarit/host/decimation.hpp"
 #include "gabarit/host/synth.hpp"
 
 namespace gabarit::host {
@@ -34,7 +35,8 @@ struct Trial {
 // `count` trials at noise rate `noise`, deterministic in `seed`.
 std::vector<Trial> make_trials(const Shape& shape, double noise, std::size_t count, std::uint64_t seed);
 
-// A table for the shape (binary detector, 1-pixel cells over +-5 px).
-std::vector<std::byte> shape_table(const Shape& shape, double keep, std::uint64_t seed);
+// A table for the shape (binary detector, 1-pixel cells over +-5 px),
+// decimated to `keep` by `policy`.
+std::vector<std::byte> shape_table(const Shape& shape, double keep, std::uint64_t seed, const DecimationPolicy& policy = {});
 
 }  // namespace gabarit::host

@@ -1,11 +1,11 @@
-// Minimal SVG charts for the bench report (no plotting dependency): a heat
+// Minimal SVG charts for reports (gabarit bench, gabarit tables analyse; no plotting dependency): a heat
 // map with numbers in its cells, a line chart, and horizontal bars.
 #pragma once
 
 #include <string>
 #include <vector>
 
-namespace gabarit::bench::svg {
+namespace gabarit::host::svg {
 
 struct Series {
   std::string label;
@@ -27,4 +27,4 @@ std::string bars(const std::string& title, const std::string& value_title, const
 
 void write(const std::string& path, const std::string& svg);
 
-}  // namespace gabarit::bench::svg
+}  // namespace gabarit::host::svg

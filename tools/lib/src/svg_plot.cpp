@@ -1,4 +1,4 @@
-#include "svg_plot.hpp"
+#include "gabarit/host/svg_plot.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -7,7 +7,7 @@
 
 #include "gabarit/app/error.hpp"
 
-namespace gabarit::bench::svg {
+namespace gabarit::host::svg {
 namespace {
 
 std::string esc(const std::string& s) {
@@ -138,4 +138,4 @@ void write(const std::string& path, const std::string& svg) {
   if (!f.flush()) throw app::Error(path + ": write failed");
 }
 
-}  // namespace gabarit::bench::svg
+}  // namespace gabarit::host::svg

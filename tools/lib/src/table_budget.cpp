@@ -1,0 +1,122 @@
+#include "gabarit/host/table_budget.hpp"
+
+#include <string>
+
+#include "gabarit/app/error.hpp"
+#include "gabarit/app/scratch.hpp"
+#include "gabarit/deterministic_math.hpp"
+#include "gabarit/host/table_analysis.hpp"
+#include "gabarit/host/voter_trials.hpp"
+#include "gabarit/table_view.hpp"
+#include "gabarit/tracker.hpp"
+
+namespace gabarit::host {
+namespace {
+
+// The keep ratios searched: from this up to 1 (Algorithm 2 keeps at least
+// one reference per stencil however small keep is).
+constexpr double kSmallestKeep = 1e-6;
+constexpr int kBisectionSteps = 40;
+
+TableView open_built(const std::vector<std::byte>& bytes) {
+  TableView v;
+  if (TableView::open(bytes, v) != Status::kOk) throw app::Error("internal error: a budget table does not validate");
+  return v;
+}
+
+}  // namespace
+
+std::vector<std::byte> build_table_to_budget(const ModelStack& model, const BuildOptions& options, const Budget& budget,
+                                             BudgetReport& report) {
+  if (budget.max_bytes == 0 && budget.min_margin == 0) throw app::Error("budget: give a byte budget, a margin, or both");
+  report = {};
+  Stencils stencils = compute_stencils(model, options);
+  const auto build_at = [&](double keep) {
+    BuildOptions o = options;
+    o.keep = keep;
+    o.progress = {};
+    const CsrLists csr = assemble_csr(stencils, o);
+    ++report.builds;
+    if (csr.cells.empty()) return std::vector<std::byte>{};
+    return serialise_table(model, o, stencils, csr);
+  };
+  const auto margin_of = [](const std::vector<std::byte>& bytes) { return overall_margin(open_built(bytes)); };
+
+  double chosen = 1.0;
+  std::vector<std::byte> table;
+  if (budget.min_margin > 0) {
+    table = build_at(1.0);
+    const std::uint32_t full = margin_of(table);
+    if (full < budget.min_margin) {
+      throw app::Error("even the full table's margin of error is " + std::to_string(full) + " px, below --min-margin " +
+                       std::to_string(budget.min_margin) + ": use a larger model or smaller cells");
+    }
+    // The smallest keep whose margin reaches the requirement: hi always meets it.
+    double lo = kSmallestKeep, hi = 1.0;
+    std::vector<std::byte> at_lo = build_at(lo);
+    if (!at_lo.empty() && margin_of(at_lo) >= budget.min_margin) {
+      hi = lo, table = std::move(at_lo);
+    } else {
+      for (int i = 0; i < kBisectionSteps && hi - lo > 1e-4 * hi; ++i) {
+        const double mid = (lo + hi) / 2;
+        std::vector<std::byte> t = build_at(mid);
+        if (!t.empty() && margin_of(t) >= budget.min_margin) hi = mid, table = std::move(t);
+        else lo = mid;
+      }
+    }
+    chosen = hi;
+    if (budget.max_bytes > 0 && table.size() > budget.max_bytes) {
+      throw app::Error("the smallest table with a margin of error of at least " + std::to_string(budget.min_margin) + " px takes " +
+                       std::to_string(table.size()) + " bytes, above --max-bytes " + std::to_string(budget.max_bytes));
+    }
+  } else {
+    table = build_at(1.0);
+    if (table.size() > budget.max_bytes) {
+      std::vector<std::byte> smallest = build_at(kSmallestKeep);
+      if (smallest.empty() || smallest.size() > budget.max_bytes) {
+        throw app::Error("the smallest table this model and space allow takes " + std::to_string(smallest.size()) +
+                         " bytes, above --max-bytes " + std::to_string(budget.max_bytes) +
+                         ": use fewer cells, a smaller ROI, or leave the model images out (--no-model-images)");
+      }
+      // The largest keep that fits: lo always fits.
+      double lo = kSmallestKeep, hi = 1.0;
+      table = std::move(smallest);
+      for (int i = 0; i < kBisectionSteps && hi - lo > 1e-5; ++i) {
+        const double mid = (lo + hi) / 2;
+        std::vector<std::byte> t = build_at(mid);
+        if (!t.empty() && t.size() <= budget.max_bytes) lo = mid, table = std::move(t);
+        else hi = mid;
+      }
+      chosen = lo;
+    }
+  }
+  const TableView view = open_built(table);
+  const TableAnalysis a = analyse_table(view);
+  report.keep = chosen;
+  report.bytes = table.size();
+  report.margin = a.overall_margin;
+  report.margin_exact = a.exact;
+  return table;
+}
+
+double measured_noise_tolerance(const std::vector<std::byte>& table, const std::vector<Point>& model_points, std::size_t trials,
+                                std::uint64_t seed) {
+  const TableView view = open_built(table);
+  app::TrackerBuffers buffers(view, app::VoterChoice::kAuto);
+  const Shape shape = make_shape("model", model_points);
+  double reached = -1;
+  for (int level = 0; level <= 25; ++level) {
+    const double noise = 0.02 * level;
+    for (const Trial& t : make_trials(shape, noise, trials, seed + static_cast<std::uint64_t>(level))) {
+      StepResult r;
+      const Pose previous{static_cast<float>(t.previous.x), static_cast<float>(t.previous.y), 0, 0};
+      if (track_step(view, {table_format::DetectorKind::kBinary, 0}, t.frame.view(), previous, buffers.scratch(), r) != Status::kOk)
+        throw app::Error("internal error: track_step failed");
+      if (round_to_int(r.pose.x) != t.truth.x || round_to_int(r.pose.y) != t.truth.y) return reached;
+    }
+    reached = noise;
+  }
+  return reached;
+}
+
+}  // namespace gabarit::host
