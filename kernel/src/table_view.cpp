@@ -1,7 +1,7 @@
 #include "gabarit/table_view.hpp"
 
+#include <bit>
 #include <cstring>
-#include <type_traits>
 
 #include "gabarit/assert.hpp"
 #include "gabarit/crc32.hpp"
@@ -35,26 +35,53 @@ Status check_axis(const std::byte* base, std::size_t at, float limit, std::uint3
   return Status::kOk;
 }
 
-// Offsets start at 0, never decrease and end at the reference count; compact
-// offsets are also canonical (each block's first delta is 0), so one table
-// has one encoding of its lists.
+// Offsets start at 0, never decrease and end at the reference count.
 template <class Offsets>
-Status check_offsets(const Offsets& offsets, std::uint32_t pixels, std::uint32_t reference_count,
-                     unsigned block_log2) noexcept {
-  if constexpr (!std::is_same_v<Offsets, WideOffsets>) {
-    for (std::uint32_t p = 0; p <= pixels; p += 1u << block_log2) {
-      if (load_le<std::uint32_t>(offsets.bases + (std::size_t{p} >> block_log2) * 4) != offsets.begin(p)) {
-        return Status::kOffsetsNotMonotonic;
-      }
-    }
-  }
-  (void)block_log2;
+Status check_offsets(const Offsets& offsets, std::uint32_t pixels, std::uint32_t reference_count) noexcept {
   if (offsets.begin(0) != 0) return Status::kOffsetsNotMonotonic;
   for (std::uint32_t p = 0; p < pixels; ++p) {
     if (offsets.begin(p + 1) < offsets.begin(p)) return Status::kOffsetsNotMonotonic;
   }
   if (offsets.begin(pixels) != reference_count) return Status::kOffsetsNotMonotonic;
   return Status::kOk;
+}
+
+// Compact offsets are also canonical, so one table has one encoding of its
+// lists: ranks count the mask bits before each block, which add up to the
+// delta count; no bit for a position past the ROI; within a block the
+// deltas strictly increase (a pixel marked non-empty lists a cell) and the
+// next block's base is this one's plus its last delta. Reads only inside
+// the section (its size was checked against the header's counts).
+template <class Delta>
+Status check_compact_blocks(const std::byte* blocks, const std::byte* deltas, std::uint32_t pixels,
+                            std::uint32_t delta_count) noexcept {
+  const std::uint32_t count = table_format::offset_block_count(pixels);
+  std::uint32_t rank = 0;
+  for (std::uint32_t b = 0; b < count; ++b) {
+    const std::byte* h = blocks + std::size_t{b} * table_format::kOffsetBlockHeaderBytes;
+    const std::uint32_t base = load_le<std::uint32_t>(h);
+    const std::uint64_t mask_lo = load_le<std::uint64_t>(h + 8), mask_hi = load_le<std::uint64_t>(h + 16);
+    if (load_le<std::uint32_t>(h + 4) != rank) return Status::kOffsetsNotMonotonic;
+    // Only positions that are pixels (< pixels) may be marked.
+    const std::uint32_t first = b << table_format::kOffsetBlockLog2;
+    const std::uint32_t inside = pixels - first >= table_format::kOffsetBlockPixels ? table_format::kOffsetBlockPixels : pixels - first;
+    if ((mask_lo & ~table_format::low_bits(inside)) != 0 || (mask_hi & ~table_format::low_bits(inside < 64 ? 0 : inside - 64)) != 0) {
+      return Status::kOffsetsNotMonotonic;
+    }
+    const auto marked = static_cast<std::uint32_t>(std::popcount(mask_lo) + std::popcount(mask_hi));
+    if (marked > delta_count - rank) return Status::kOffsetsNotMonotonic;
+    std::uint32_t previous = 0;
+    for (std::uint32_t k = 0; k < marked; ++k) {
+      const std::uint32_t d = load_le<Delta>(deltas + std::size_t{rank + k} * sizeof(Delta));
+      if (d <= previous) return Status::kOffsetsNotMonotonic;
+      previous = d;
+    }
+    rank += marked;
+    if (b + 1 < count && load_le<std::uint32_t>(h + table_format::kOffsetBlockHeaderBytes) != base + previous) {
+      return Status::kOffsetsNotMonotonic;
+    }
+  }
+  return rank == delta_count ? Status::kOk : Status::kOffsetsNotMonotonic;
 }
 
 template <class Ref, class Offsets>
@@ -149,13 +176,14 @@ Status TableView::open(std::span<const std::byte> bytes, TableView& out) noexcep
   const bool compact = (flags & table_format::kFlagCompactOffsets) != 0;
   const std::uint8_t delta_bytes = load_le<std::uint8_t>(b + off::kOffsetDeltaBytes);
   const std::uint8_t block_log2 = load_le<std::uint8_t>(b + off::kOffsetBlockLog2);
+  const std::uint32_t delta_count = load_le<std::uint32_t>(b + off::kOffsetDeltaCount);
   if ((flags & ~table_format::kKnownFlags) != 0 || (has_images && minor < 1) || (compact && minor < 2) ||
       load_le<std::uint16_t>(b + off::kReserved58) != 0 ||
       (!has_images && load_le<std::uint32_t>(b + off::kModelImagesOffset) != 0) ||
-      (compact ? (delta_bytes != 1 && delta_bytes != 2) || block_log2 < table_format::kMinOffsetBlockLog2 ||
-                     block_log2 > table_format::kMaxOffsetBlockLog2
-               : delta_bytes != 0 || block_log2 != 0) ||
-      !all_zero(b + off::kReserved146, table_format::kHeaderBytes - off::kReserved146)) {
+      (compact ? (delta_bytes != 1 && delta_bytes != 2) || block_log2 != table_format::kOffsetBlockLog2
+               : delta_bytes != 0 || block_log2 != 0 || delta_count != 0) ||
+      load_le<std::uint16_t>(b + off::kReserved146) != 0 ||
+      !all_zero(b + off::kReserved152, table_format::kHeaderBytes - off::kReserved152)) {
     return Status::kBadHeaderField;
   }
   const std::uint32_t cell_count = load_le<std::uint32_t>(b + off::kCellCount);
@@ -173,6 +201,7 @@ Status TableView::open(std::span<const std::byte> bytes, TableView& out) noexcep
     return Status::kCountTooLarge;
   }
   if (cell_count == 0 || roi_width == 0 || roi_height == 0 || depth_count == 0) return Status::kBadHeaderField;
+  if (delta_count > std::uint32_t{roi_width} * roi_height) return Status::kBadHeaderField;
   if (reference_bytes != table_format::narrowest_reference_bytes(cell_count)) return Status::kBadHeaderField;
   if (detector > static_cast<std::uint8_t>(table_format::DetectorKind::kCanny)) {
     return Status::kBadHeaderField;
@@ -215,7 +244,7 @@ Status TableView::open(std::span<const std::byte> bytes, TableView& out) noexcep
   // The layout is canonical (table_format::layout_of), so any other offset is an error.
   const std::uint32_t pixels = std::uint32_t{roi_width} * roi_height;
   const table_format::Layout layout = table_format::layout_of(
-      {cell_count, pixels, reference_count, reference_bytes, depth_count, model_point_count, image_bytes, delta_bytes, block_log2});
+      {cell_count, pixels, reference_count, reference_bytes, depth_count, model_point_count, image_bytes, delta_bytes, delta_count});
   if (load_le<std::uint32_t>(b + off::kCellsOffset) != layout.cells ||
       load_le<std::uint32_t>(b + off::kPixelOffsetsOffset) != layout.pixel_offsets ||
       load_le<std::uint32_t>(b + off::kReferencesOffset) != layout.references ||
@@ -231,10 +260,10 @@ Status TableView::open(std::span<const std::byte> bytes, TableView& out) noexcep
   // CSR offsets and lists, in the table's offset encoding.
   const std::byte* offsets = b + offsets_at;
   const std::byte* deltas =
-      compact ? offsets + table_format::align_up(table_format::offset_block_count(pixels, block_log2) * 4) : nullptr;
+      compact ? offsets + std::size_t{table_format::offset_block_count(pixels)} * table_format::kOffsetBlockHeaderBytes : nullptr;
   const std::byte* refs = b + refs_at;
   const auto check_lists = [&](const auto& reader) -> Status {
-    GABARIT_TRY(check_offsets(reader, pixels, reference_count, block_log2));
+    GABARIT_TRY(check_offsets(reader, pixels, reference_count));
     switch (reference_bytes) {
       case 1: return check_references<std::uint8_t>(reader, refs, pixels, cell_count);
       case 2: return check_references<std::uint16_t>(reader, refs, pixels, cell_count);
@@ -251,10 +280,12 @@ Status TableView::open(std::span<const std::byte> bytes, TableView& out) noexcep
   const auto with_reader = [&](const auto& check) -> Status {
     switch (delta_bytes) {
       case 0: return check(WideOffsets{offsets});
-      case 1: return check(CompactOffsets<std::uint8_t>{offsets, deltas, block_log2});
-      default: return check(CompactOffsets<std::uint16_t>{offsets, deltas, block_log2});
+      case 1: return check(CompactOffsets<std::uint8_t>{offsets, deltas});
+      default: return check(CompactOffsets<std::uint16_t>{offsets, deltas});
     }
   };
+  if (delta_bytes == 1) GABARIT_TRY(check_compact_blocks<std::uint8_t>(offsets, deltas, pixels, delta_count));
+  if (delta_bytes == 2) GABARIT_TRY(check_compact_blocks<std::uint16_t>(offsets, deltas, pixels, delta_count));
   GABARIT_TRY(with_reader(check_lists));
 
   // Cell descriptors: bounded ordered bounds (twice the axis limit: a cell
@@ -293,7 +324,6 @@ Status TableView::open(std::span<const std::byte> bytes, TableView& out) noexcep
   view.pixel_offsets_ = offsets;
   view.offset_deltas_ = deltas;
   view.offset_delta_bytes_ = delta_bytes;
-  view.offset_block_log2_ = block_log2;
   view.references_ = refs;
   view.model_counts_ = b + counts_at;
   view.model_points_ = b + points_at;

@@ -212,4 +212,39 @@ expect 1 "wrap.csv:2: malformed row" $g eval --poses "$work/wrap.csv" --gt "$d/g
 printf 'frame,x,y,theta_deg,depth\n-1,1,1,0,0\n' > "$work/negative.csv"
 expect 1 "negative.csv:2: malformed row" $g eval --poses "$work/negative.csv" --gt "$d/gt.csv"
 expect 2 "want WxH with 8 <= W,H <= 8192" $g synth --shape curve --size 4294967304x8 -o "$work/x"
+# Compact offsets (format 1.2, the default) and u32 offsets hold the same
+# lists: the same poses, fewer bytes.
+$g tables build --model-points "$d/model.csv" --binary --x -5:5:11 --y -5:5:11 --keep 0.2 --offsets wide -o "$work/wide.gbt" 2>/dev/null
+$g tables build --model-points "$d/model.csv" --binary --x -5:5:11 --y -5:5:11 --keep 0.2 -o "$work/compact.gbt" 2>/dev/null
+[ "$(od -An -tu2 -j10 -N2 "$work/wide.gbt" | tr -d ' ')" = 0 ] || fail "--offsets wide is not format 1.0"
+[ "$(od -An -tu2 -j10 -N2 "$work/compact.gbt" | tr -d ' ')" = 2 ] || fail "the default table is not format 1.2"
+[ "$(stat -c %s "$work/compact.gbt")" -lt "$(stat -c %s "$work/wide.gbt")" ] || fail "compact offsets are not smaller"
+$g track --plain --table "$work/wide.gbt" --frames "$d/frames.y4m" --init "$init0" -o "$work/wide.csv" 2>/dev/null
+$g track --plain --table "$work/compact.gbt" --frames "$d/frames.y4m" --init "$init0" -o "$work/compact.csv" 2>/dev/null
+cmp -s "$work/wide.csv" "$work/compact.csv" || fail "compact and u32 offsets track differently"
+expect 2 "want compact or wide" $g tables build --model-points "$d/model.csv" --binary --x 0:0:1 --y 0:0:1 --offsets narrow -o "$work/x.gbt"
+# tables analyse: JSON with the margin, plots on request.
+$g tables analyse "$work/compact.gbt" --plots "$work/plots" -o "$work/analysis.json" 2>/dev/null || fail "tables analyse failed"
+grep -q '"overall_margin": [0-9]' "$work/analysis.json" || fail "no overall_margin in the analysis"
+grep -q '"margins_exact": true' "$work/analysis.json" || fail "1-pixel translation cells not marked exact"
+[ -s "$work/plots/overlap_map.svg" ] && [ -s "$work/plots/margins.svg" ] || fail "analysis plots missing"
+expect 2 "give exactly one TABLE" $g tables analyse "$work/compact.gbt" "$work/wide.gbt"
+# Budgets: the table fits, and the report says what was reached.
+half_kept=$(stat -c %s "$work/a.gbt")  # keep 0.5
+$g tables build --model-points "$d/model.csv" --binary --x -5:5:11 --y -5:5:11 --max-bytes 20000 -o "$work/budget.gbt" 2> "$work/budget.txt"
+[ "$(stat -c %s "$work/budget.gbt")" -le 20000 ] || fail "--max-bytes 20000 gave $(stat -c %s "$work/budget.gbt") bytes"
+[ "$(stat -c %s "$work/budget.gbt")" -ge 19000 ] || fail "--max-bytes 20000 left more than 5% unused"
+grep -q "margin of error [0-9]* px (exact" "$work/budget.txt" || fail "the budget report has no margin"
+grep -q "noise tolerance" "$work/budget.txt" || fail "the budget report has no noise tolerance"
+$g tables build --model-points "$d/model.csv" --binary --x -5:5:11 --y -5:5:11 --min-margin 30 -o "$work/margin.gbt" 2>/dev/null
+$g tables analyse "$work/margin.gbt" --samples 0 2>/dev/null | grep -q '"overall_margin": \(3[0-9]\|[4-9][0-9]\|[0-9][0-9][0-9]\)' || fail "--min-margin 30 not met"
+expect 2 "exclude each other" $g tables build --model-points "$d/model.csv" --binary --x 0:0:1 --y 0:0:1 --keep 0.5 --max-bytes 9000 -o "$work/x.gbt"
+expect 1 "the smallest table this model and space allow" $g tables build --model-points "$d/model.csv" --binary --x -5:5:11 --y -5:5:11 --max-bytes 500 -o "$work/x.gbt"
+expect 1 "below --min-margin" $g tables build --model-points "$d/model.csv" --binary --x -5:5:11 --y -5:5:11 --min-margin 100000 -o "$work/x.gbt"
+[ ! -e "$work/x.gbt" ] || fail "a refused budget wrote a table"
+# Template reduction: fewer points, a smaller table.
+$g tables build --model-points "$d/model.csv" --binary --x -5:5:11 --y -5:5:11 --reduce-template 10 -o "$work/reduced.gbt" 2> "$work/reduced.txt"
+grep -q "characterising value [0-9]*" "$work/reduced.txt" || fail "no template reduction report"
+[ "$(stat -c %s "$work/reduced.gbt")" -lt "$half_kept" ] || fail "the reduced template's table is not smaller"
+expect 2 "translation spaces" $g tables build --model-points "$d/model.csv" --binary --x -5:5:11 --y -5:5:11 --theta -1:1:3 --reduce-template 5 -o "$work/x.gbt"
 echo "1 passed, 0 failed"

@@ -210,20 +210,30 @@ TEST(TableView, CompactOffsetsHoldTheSameListsAndRefuseACraftedEncoding) {
     return open_copy(bad);
   };
   EXPECT_EQ(edited(off::kOffsetDeltaBytes, 3, 1), Status::kBadHeaderField);
-  EXPECT_EQ(edited(off::kOffsetBlockLog2, 11, 1), Status::kBadHeaderField);
-  EXPECT_EQ(edited(off::kOffsetBlockLog2, 1, 1), Status::kBadHeaderField);
+  EXPECT_EQ(edited(off::kOffsetBlockLog2, 6, 1), Status::kBadHeaderField);
   EXPECT_EQ(edited(off::kVersionMinor, 1, 2), Status::kBadHeaderField);
-  // Another block size moves the deltas: the layout no longer matches.
-  EXPECT_NE(edited(off::kOffsetBlockLog2, c.offset_block_log2() + 1u, 1), Status::kOk);
-  // A block whose first delta is not 0 (not canonical), and a delta past the end.
-  const std::uint32_t offsets_at = load_le<std::uint32_t>(compact.data() + off::kPixelOffsetsOffset);
-  const std::uint32_t blocks = table_format::offset_block_count(c.roi_pixels(), c.offset_block_log2());
-  const std::uint32_t deltas_at = offsets_at + table_format::align_up(blocks * 4);
-  const std::uint32_t second_block = 1u << c.offset_block_log2();
-  ASSERT_LE(second_block, c.roi_pixels());
-  EXPECT_EQ(edited(deltas_at + second_block * c.offset_delta_bytes(), 1, c.offset_delta_bytes()), Status::kOffsetsNotMonotonic);
-  EXPECT_EQ(edited(deltas_at + c.roi_pixels() * c.offset_delta_bytes(), 200, c.offset_delta_bytes()), Status::kOffsetsNotMonotonic);
-  EXPECT_EQ(edited(offsets_at + 4, c.references_begin(second_block) + 1, 4), Status::kOffsetsNotMonotonic);
+  EXPECT_EQ(edited(off::kOffsetDeltaCount, c.roi_pixels() + 1, 4), Status::kBadHeaderField);
+  // Another delta count moves the references: the layout no longer matches.
+  EXPECT_NE(edited(off::kOffsetDeltaCount, load_le<std::uint32_t>(compact.data() + off::kOffsetDeltaCount) - 1, 4), Status::kOk);
+  // The block headers: a wrong rank, a pixel past the ROI marked, a base
+  // that does not follow from the block before, and deltas out of order.
+  const std::uint32_t blocks_at = load_le<std::uint32_t>(compact.data() + off::kPixelOffsetsOffset);
+  const std::uint32_t blocks = table_format::offset_block_count(c.roi_pixels());
+  const std::uint32_t deltas_at = blocks_at + blocks * table_format::kOffsetBlockHeaderBytes;
+  ASSERT_GE(blocks, 2u);
+  constexpr std::uint32_t H = table_format::kOffsetBlockHeaderBytes;
+  EXPECT_EQ(edited(blocks_at + H + 4, load_le<std::uint32_t>(compact.data() + blocks_at + H + 4) + 1, 4), Status::kOffsetsNotMonotonic);
+  {
+    auto bad = compact;
+    const std::size_t last_mask = blocks_at + (blocks - 1) * H + 16;
+    store_le<std::uint64_t>(bad.data() + last_mask, load_le<std::uint64_t>(bad.data() + last_mask) | (std::uint64_t{1} << 63));
+    reseal(bad);
+    EXPECT_EQ(open_copy(bad), Status::kOffsetsNotMonotonic);  // position 128 (blocks - 1) + 127 is past the ROI
+  }
+  EXPECT_EQ(edited(blocks_at + H, load_le<std::uint32_t>(compact.data() + blocks_at + H) + 1, 4), Status::kOffsetsNotMonotonic);
+  ASSERT_EQ(c.offset_delta_bytes(), 1);
+  EXPECT_EQ(edited(deltas_at + 1, load_le<std::uint8_t>(compact.data() + deltas_at), 1), Status::kOffsetsNotMonotonic);
+  EXPECT_EQ(edited(deltas_at, 0, 1), Status::kOffsetsNotMonotonic);  // a marked pixel that lists nothing
 }
 
 struct Edit {

@@ -92,6 +92,7 @@ TEST(Decimation, AlgorithmTwoKeepsEveryStencilAtItsTargetSize) {
 TEST(Decimation, AlgorithmTwoRemovesTheCrowdedPixelsFirstAndMoreSoWithSharperWeights) {
   const StencilPixels s = mixed_stencils();
   DecimationPolicy identity, power, greedy;
+  identity.spread = power.spread = greedy.spread = false;  // the weights alone
   power.weight = RemovalWeight::kPower;
   power.power = 2;
   greedy.weight = RemovalWeight::kGreedy;
@@ -145,6 +146,7 @@ TEST(Decimation, SpreadLeavesNoLargeHoles) {
   s.cells.resize(1);
   for (std::uint32_t p = 0; p < 2000; ++p) s.cells[0].push_back(p);
   DecimationPolicy plain, spread;
+  plain.spread = false;
   spread.spread = true;
   std::size_t plain_worst = 0, spread_worst = 0;
   for (std::uint64_t seed = 1; seed <= 8; ++seed) {
@@ -177,6 +179,8 @@ TEST(Decimation, NamesParse) {
   EXPECT_EQ(p.power, 3u);
   EXPECT_THROW(parse_removal_weight("power:4", p), app::Error);
   p.most_overlapping = true;
+  EXPECT_EQ(describe(p), "stencil, power:3, most-overlapping, spread");
+  p.spread = false;
   EXPECT_EQ(describe(p), "stencil, power:3, most-overlapping");
 }
 

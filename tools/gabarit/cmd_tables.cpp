@@ -56,10 +56,13 @@ int tables_build(const std::vector<std::string>& argv) {
               "                          (default), n^K (K = 2, 3), always the most overlapped pixel, or by how alike\n"
               "                          the stencils sharing the pixel are"},
              {"--most-overlapping", "", "stencil decimation: remove first the pixels shared with the most overlapping stencil"},
-             {"--spread", "", "stencil decimation: spread removals evenly (a neighbourhood map)"},
+             {"--no-spread", "", "stencil decimation: without the spread policy (a neighbourhood map that spreads\n"
+              "                          removals evenly; on by default)"},
              {"--min-area", "N", "stencil decimation: keep at least N references per stencil (default 0: keep x size, at least 1)"},
              {"--max-bytes", "N", "build to a budget instead of --keep: the table keeping the most references that fits\n"
               "                          in N bytes (a flash or BRAM budget); reports its margin of error"},
+             {"--max-references", "N", "with or instead of --max-bytes: at most N references (a hardware voter's reference\n"
+              "                          memory, hdl/)"},
              {"--min-margin", "K", "build to a margin instead of --keep: the smallest table whose margin of error (gabarit\n"
               "                          tables analyse) is at least K pixels; with --max-bytes, refused if it does not fit"},
              {"--reduce-template", "K", "template reduction first (docs/experiments.md): keep the fewest model points whose\n"
@@ -149,7 +152,7 @@ int tables_build(const std::vector<std::string>& argv) {
   bo.decimation.method = host::parse_decimation(args.get_or("--decimation", "stencil"));
   if (args.has("--weight")) host::parse_removal_weight(args.get("--weight"), bo.decimation);
   bo.decimation.most_overlapping = args.has("--most-overlapping");
-  bo.decimation.spread = args.has("--spread");
+  bo.decimation.spread = !args.has("--no-spread");
   bo.decimation.min_area = static_cast<std::uint32_t>(args.integer("--min-area", 0, 0, 1 << 24));
   if (isatty(STDERR_FILENO)) {
     bo.progress = [](std::size_t done, std::size_t total) {
@@ -191,15 +194,18 @@ int tables_build(const std::vector<std::string>& argv) {
   }
   host::Budget budget;
   if (args.has("--max-bytes")) budget.max_bytes = static_cast<std::uint64_t>(args.integer("--max-bytes", 0, 1, table_format::kMaxTableBytes));
+  if (args.has("--max-references"))
+    budget.max_references = static_cast<std::uint32_t>(args.integer("--max-references", 0, 1, table_format::kMaxReferences));
   if (args.has("--min-margin")) budget.min_margin = static_cast<std::uint32_t>(args.integer("--min-margin", 0, 1, 1 << 24));
-  const bool budgeted = budget.max_bytes > 0 || budget.min_margin > 0;
-  if (budgeted && args.has("--keep")) throw app::UsageError("--keep and a budget (--max-bytes, --min-margin) exclude each other");
+  const bool budgeted = budget.max_bytes > 0 || budget.max_references > 0 || budget.min_margin > 0;
+  if (budgeted && args.has("--keep"))
+    throw app::UsageError("--keep and a budget (--max-bytes, --max-references, --min-margin) exclude each other");
   std::vector<std::byte> bytes;
   if (budgeted) {
     host::BudgetReport report;
     std::fprintf(stderr, "searching the keep ratio for the budget...\n");
     bytes = host::build_table_to_budget(model, bo, budget, report);
-    std::fprintf(stderr, "budget: keep %.4g%%, %zu bytes", report.keep * 100, report.bytes);
+    std::fprintf(stderr, "budget: keep %.4g%%, %zu bytes, %u references", report.keep * 100, report.bytes, report.references);
     if (budget.max_bytes) std::fprintf(stderr, " (%.1f%% of %llu)", 100.0 * static_cast<double>(report.bytes) / static_cast<double>(budget.max_bytes),
                                         static_cast<unsigned long long>(budget.max_bytes));
     std::fprintf(stderr, ", margin of error %u px (%s), %zu tables tried\n", report.margin,

@@ -18,7 +18,9 @@ int vectors(const std::vector<std::string>& argv) {
              {"--points", "N", "approximate model feature count at depth 0, 100..5000 (default 1000)"},
              {"--depths", "N", "focus-stack depths, 1..16 (default 4)"},
              {"--frames", "N", "frames, 1..1000 (default 8)"},
-             {"--keep", "RATIO", "fraction of stencil references kept, (0,1] (default 0.2)"},
+             {"--table-bytes", "N", "the table's budget: the most references that fit in N bytes (default 1048576, half\n"
+              "                          of an STM32H7-class part's 2 MiB flash)"},
+             {"--keep", "RATIO", "instead of --table-bytes: this fraction of stencil references, (0,1]"},
              {"--noise", "P", "salt-and-pepper rate in [0,1] (default 0.02)"},
              {"--session-frames", "N", "frames of the session's sequence, 1..1000 (default 16)"},
              {"--hidden", "START,FRAMES", "the session's occlusion (default 4,8)"},
@@ -28,7 +30,9 @@ int vectors(const std::vector<std::string>& argv) {
   o.model_points = static_cast<std::uint32_t>(args.integer("--points", o.model_points, 100, 5000));
   o.depths = static_cast<std::uint16_t>(args.integer("--depths", o.depths, 1, 16));
   o.frames = static_cast<std::uint32_t>(args.integer("--frames", o.frames, 1, 1000));
-  o.keep = args.number("--keep", o.keep, 1e-6, 1.0);
+  if (args.has("--keep") && args.has("--table-bytes")) throw app::UsageError("--keep and --table-bytes exclude each other");
+  o.keep = args.has("--keep") ? args.number("--keep", 0.2, 1e-6, 1.0) : 0.0;
+  o.table_budget_bytes = static_cast<std::uint64_t>(args.integer("--table-bytes", static_cast<long long>(o.table_budget_bytes), 4096, 1 << 30));
   o.noise = args.number("--noise", o.noise, 0.0, 1.0);
   o.seed = static_cast<std::uint64_t>(args.integer("--seed", 1, 0, INT64_MAX));
   o.session_frames = static_cast<std::uint32_t>(args.integer("--session-frames", o.session_frames, 1, 1000));
@@ -42,9 +46,9 @@ int vectors(const std::vector<std::string>& argv) {
   }
   const auto s = host::write_test_vectors(o, args.get("--out"));
   std::fprintf(stderr,
-               "%s: %zu-point model x %u depths, %u cells, table %zu bytes; %u frames %ux%u, vectors %zu bytes; "
+               "%s: %zu-point model x %u depths, %u cells, table %zu bytes (keep %.3g%%); %u frames %ux%u, vectors %zu bytes; "
                "%u/%u frames on the true pose; session %u frames, %zu bytes, %u lost, %s\n",
-               args.get("--out").c_str(), s.model_points, o.depths, s.cells, s.table_bytes, o.frames, s.width, s.height,
+               args.get("--out").c_str(), s.model_points, o.depths, s.cells, s.table_bytes, 100 * s.keep, o.frames, s.width, s.height,
                s.vector_bytes, s.frames_on_truth, o.frames, o.session_frames, s.session_bytes, s.session_lost_frames,
                s.session_reacquired ? "reacquired" : "not reacquired");
   return 0;

@@ -19,13 +19,19 @@ inline constexpr std::uint32_t kFlagModelImages = 1u;
 inline constexpr std::uint32_t kFlagCompactOffsets = 2u;
 inline constexpr std::uint32_t kKnownFlags = kFlagModelImages | kFlagCompactOffsets;  // others must be 0
 
-// Compact pixel offsets (1.2): the ROI's pixels in blocks of 2^block_log2;
-// a u32 base per block (the first reference of the block's first pixel),
-// then per pixel (and one past the last) a u8 or u16 delta from its block's
-// base. begin(p) = base[p >> block_log2] + delta[p]. Bytes fall with the
-// references, since deltas are narrow where pixels hold few.
-inline constexpr std::uint8_t kMinOffsetBlockLog2 = 2;
-inline constexpr std::uint8_t kMaxOffsetBlockLog2 = 10;
+// Compact pixel offsets (1.2): the ROI's pixels in blocks of 128. Per block
+// a 24-byte header { u32 base: the block's first reference; u32 rank: the
+// non-empty pixels before the block; u64 mask[2]: bit i of the 128 set when
+// pixel 128 b + i lists a cell }, then one u8 or u16 delta per non-empty
+// pixel: its end (one past its last reference) less its block's base. So
+//   begin(p) = base + (j ? delta[rank + j - 1] : 0),  j = the mask's bits below p,
+// and an empty pixel costs a bit. Bytes fall with the references.
+inline constexpr std::uint8_t kOffsetBlockLog2 = 7;
+inline constexpr std::uint32_t kOffsetBlockPixels = 1u << kOffsetBlockLog2;
+inline constexpr std::uint32_t kOffsetBlockHeaderBytes = 24;
+
+// The mask bits of a block below position i (0..128), in its two words.
+constexpr std::uint64_t low_bits(std::uint32_t n) noexcept { return n >= 64 ? ~std::uint64_t{0} : (std::uint64_t{1} << n) - 1; }
 
 inline constexpr std::uint32_t kHeaderBytes = 160;
 inline constexpr std::uint32_t kCellDescriptorBytes = 32;
@@ -111,8 +117,10 @@ inline constexpr std::size_t kModelCountsOffset = 132; // u32: depth_count x u32
 inline constexpr std::size_t kModelPointsOffset = 136; // u32: model_point_count x (i16, i16)
 inline constexpr std::size_t kModelImagesOffset = 140; // u32 (v1.1): depth_count x model_width x model_height u8, 0 if absent
 inline constexpr std::size_t kOffsetDeltaBytes = 144;  // u8 (v1.2, compact offsets): 1 or 2; else 0
-inline constexpr std::size_t kOffsetBlockLog2 = 145;   // u8 (v1.2, compact offsets): 2..10; else 0
-inline constexpr std::size_t kReserved146 = 146;       // 14 bytes, must be 0
+inline constexpr std::size_t kOffsetBlockLog2 = 145;   // u8 (v1.2, compact offsets): 7; else 0
+inline constexpr std::size_t kReserved146 = 146;       // u16, must be 0
+inline constexpr std::size_t kOffsetDeltaCount = 148;  // u32 (v1.2, compact offsets): non-empty pixels; else 0
+inline constexpr std::size_t kReserved152 = 152;       // 8 bytes, must be 0
 }  // namespace offset
 
 // Cell descriptor field offsets (bytes from the start of the descriptor).
@@ -148,17 +156,15 @@ struct LayoutCounts {
   std::uint32_t model_point_count = 0;
   std::uint32_t model_image_bytes = 0;  // 0: no model-images section
   std::uint8_t offset_delta_bytes = 0;  // 0: u32 offsets; 1, 2: compact offsets (v1.2)
-  std::uint8_t offset_block_log2 = 0;   // compact offsets: pixels per block, log2
+  std::uint32_t offset_delta_count = 0; // compact offsets: non-empty ROI pixels
 };
 
 // Blocks of compact offsets covering pixels 0..roi_pixels (one past the last).
-constexpr std::uint32_t offset_block_count(std::uint32_t roi_pixels, std::uint8_t block_log2) noexcept {
-  return (roi_pixels >> block_log2) + 1;
-}
+constexpr std::uint32_t offset_block_count(std::uint32_t roi_pixels) noexcept { return (roi_pixels >> kOffsetBlockLog2) + 1; }
 // Bytes of the pixel-offsets section.
 constexpr std::uint32_t pixel_offsets_bytes(const LayoutCounts& n) noexcept {
   if (n.offset_delta_bytes == 0) return (n.roi_pixels + 1) * 4;
-  return align_up(offset_block_count(n.roi_pixels, n.offset_block_log2) * 4) + (n.roi_pixels + 1) * n.offset_delta_bytes;
+  return offset_block_count(n.roi_pixels) * kOffsetBlockHeaderBytes + n.offset_delta_count * n.offset_delta_bytes;
 }
 // Where each section starts, and the file's size: the sections follow the
 // header in this order, each 8-byte aligned, with no gaps beyond alignment

@@ -6,6 +6,7 @@
 #pragma once
 
 #include <cstddef>
+#include <bit>
 #include <cstdint>
 #include <span>
 
@@ -58,12 +59,15 @@ struct WideOffsets {
 };
 template <class Delta>
 struct CompactOffsets {
-  const std::byte* bases;
-  const std::byte* deltas;
-  unsigned block_log2;
+  const std::byte* blocks;  // 24-byte headers: u32 base, u32 rank, u64 mask[2]
+  const std::byte* deltas;  // per non-empty pixel, its end less its block's base
   std::uint32_t begin(std::size_t pixel) const noexcept {
-    return load_le<std::uint32_t>(bases + (pixel >> block_log2) * 4) +
-           std::uint32_t{load_le<Delta>(deltas + pixel * sizeof(Delta))};
+    const std::byte* h = blocks + (pixel >> table_format::kOffsetBlockLog2) * table_format::kOffsetBlockHeaderBytes;
+    const auto i = static_cast<std::uint32_t>(pixel & (table_format::kOffsetBlockPixels - 1));
+    const auto j = static_cast<std::uint32_t>(std::popcount(load_le<std::uint64_t>(h + 8) & table_format::low_bits(i)) +
+                                              std::popcount(load_le<std::uint64_t>(h + 16) & table_format::low_bits(i < 64 ? 0 : i - 64)));
+    const std::uint32_t base = load_le<std::uint32_t>(h);
+    return j == 0 ? base : base + load_le<Delta>(deltas + std::size_t{load_le<std::uint32_t>(h + 4) + j - 1} * sizeof(Delta));
   }
 };
 
@@ -124,25 +128,24 @@ class TableView {
   std::uint32_t references_begin(std::uint32_t pixel) const noexcept {
     switch (offset_delta_bytes_) {
       case 0: return WideOffsets{pixel_offsets_}.begin(pixel);
-      case 1: return CompactOffsets<std::uint8_t>{pixel_offsets_, offset_deltas_, offset_block_log2_}.begin(pixel);
-      default: return CompactOffsets<std::uint16_t>{pixel_offsets_, offset_deltas_, offset_block_log2_}.begin(pixel);
+      case 1: return CompactOffsets<std::uint8_t>{pixel_offsets_, offset_deltas_}.begin(pixel);
+      default: return CompactOffsets<std::uint16_t>{pixel_offsets_, offset_deltas_}.begin(pixel);
     }
   }
   // Precondition: index < reference_count().
   std::uint32_t reference(std::uint32_t index) const noexcept;
   const std::byte* references_data() const noexcept { return references_; }
   // The offsets' encoding: 0 for one u32 per pixel (1.0, 1.1), else the
-  // compact deltas' width (1.2), with blocks of 2^offset_block_log2() pixels.
+  // compact deltas' width (1.2).
   std::uint8_t offset_delta_bytes() const noexcept { return offset_delta_bytes_; }
-  std::uint8_t offset_block_log2() const noexcept { return offset_block_log2_; }
   // Calls f with the reader of this table's offset encoding (WideOffsets or
   // CompactOffsets<u8 or u16>) and returns what f returns.
   template <class F>
   decltype(auto) with_offsets(F&& f) const noexcept {
     switch (offset_delta_bytes_) {
       case 0: return f(WideOffsets{pixel_offsets_});
-      case 1: return f(CompactOffsets<std::uint8_t>{pixel_offsets_, offset_deltas_, offset_block_log2_});
-      default: return f(CompactOffsets<std::uint16_t>{pixel_offsets_, offset_deltas_, offset_block_log2_});
+      case 1: return f(CompactOffsets<std::uint8_t>{pixel_offsets_, offset_deltas_});
+      default: return f(CompactOffsets<std::uint16_t>{pixel_offsets_, offset_deltas_});
     }
   }
 
@@ -173,7 +176,7 @@ class TableView {
 
   const std::byte* base_ = nullptr;
   const std::byte* cells_ = nullptr;
-  const std::byte* pixel_offsets_ = nullptr;  // u32 offsets, or the compact offsets' bases
+  const std::byte* pixel_offsets_ = nullptr;  // u32 offsets, or the compact offsets' block headers
   const std::byte* offset_deltas_ = nullptr;  // compact offsets only
   const std::byte* references_ = nullptr;
   const std::byte* model_counts_ = nullptr;
@@ -192,7 +195,6 @@ class TableView {
   std::uint16_t depth_count_ = 0;
   std::uint8_t reference_bytes_ = 0;
   std::uint8_t offset_delta_bytes_ = 0;
-  std::uint8_t offset_block_log2_ = 0;
   table_format::DetectorKind detector_kind_ = table_format::DetectorKind::kBinary;
 };
 

@@ -28,11 +28,24 @@ TableView open_built(const std::vector<std::byte>& bytes) {
 
 std::vector<std::byte> build_table_to_budget(const ModelStack& model, const BuildOptions& options, const Budget& budget,
                                              BudgetReport& report) {
-  if (budget.max_bytes == 0 && budget.min_margin == 0) throw app::Error("budget: give a byte budget, a margin, or both");
+  if (budget.max_bytes == 0 && budget.max_references == 0 && budget.min_margin == 0)
+    throw app::Error("budget: give a byte or reference budget, a margin, or both");
+  const auto fits = [&](const std::vector<std::byte>& t) {
+    return !t.empty() && (budget.max_bytes == 0 || t.size() <= budget.max_bytes) &&
+           (budget.max_references == 0 || open_built(t).reference_count() <= budget.max_references);
+  };
+  const auto budget_text = [&] {
+    std::string b;
+    if (budget.max_bytes) b += "--max-bytes " + std::to_string(budget.max_bytes);
+    if (budget.max_references) b += std::string(b.empty() ? "" : " and ") + "--max-references " + std::to_string(budget.max_references);
+    return b;
+  };
   report = {};
-  Stencils stencils = compute_stencils(model, options);
+  BuildOptions base = options;
+  base.keep = 1.0;  // the search sets it; options.keep is ignored
+  Stencils stencils = compute_stencils(model, base);
   const auto build_at = [&](double keep) {
-    BuildOptions o = options;
+    BuildOptions o = base;
     o.keep = keep;
     o.progress = {};
     const CsrLists csr = assemble_csr(stencils, o);
@@ -65,18 +78,19 @@ std::vector<std::byte> build_table_to_budget(const ModelStack& model, const Buil
       }
     }
     chosen = hi;
-    if (budget.max_bytes > 0 && table.size() > budget.max_bytes) {
+    if ((budget.max_bytes || budget.max_references) && !fits(table)) {
       throw app::Error("the smallest table with a margin of error of at least " + std::to_string(budget.min_margin) + " px takes " +
-                       std::to_string(table.size()) + " bytes, above --max-bytes " + std::to_string(budget.max_bytes));
+                       std::to_string(table.size()) + " bytes and " + std::to_string(open_built(table).reference_count()) +
+                       " references, above " + budget_text());
     }
   } else {
     table = build_at(1.0);
-    if (table.size() > budget.max_bytes) {
+    if (!fits(table)) {
       std::vector<std::byte> smallest = build_at(kSmallestKeep);
-      if (smallest.empty() || smallest.size() > budget.max_bytes) {
-        throw app::Error("the smallest table this model and space allow takes " + std::to_string(smallest.size()) +
-                         " bytes, above --max-bytes " + std::to_string(budget.max_bytes) +
-                         ": use fewer cells, a smaller ROI, or leave the model images out (--no-model-images)");
+      if (!fits(smallest)) {
+        throw app::Error("the smallest table this model and space allow takes " + std::to_string(smallest.size()) + " bytes and " +
+                         std::to_string(smallest.empty() ? 0 : open_built(smallest).reference_count()) + " references, above " +
+                         budget_text() + ": use fewer cells, a smaller ROI, or leave the model images out (--no-model-images)");
       }
       // The largest keep that fits: lo always fits.
       double lo = kSmallestKeep, hi = 1.0;
@@ -84,7 +98,7 @@ std::vector<std::byte> build_table_to_budget(const ModelStack& model, const Buil
       for (int i = 0; i < kBisectionSteps && hi - lo > 1e-5; ++i) {
         const double mid = (lo + hi) / 2;
         std::vector<std::byte> t = build_at(mid);
-        if (!t.empty() && t.size() <= budget.max_bytes) lo = mid, table = std::move(t);
+        if (fits(t)) lo = mid, table = std::move(t);
         else hi = mid;
       }
       chosen = lo;
@@ -94,6 +108,7 @@ std::vector<std::byte> build_table_to_budget(const ModelStack& model, const Buil
   const TableAnalysis a = analyse_table(view);
   report.keep = chosen;
   report.bytes = table.size();
+  report.references = view.reference_count();
   report.margin = a.overall_margin;
   report.margin_exact = a.exact;
   return table;

@@ -24,24 +24,22 @@ void put_axis(std::byte* at, const Axis& a) {
   store_le<std::uint32_t>(at + 8, a.cells);
 }
 
-// The compact offset encoding (format 1.2) with the fewest bytes: block
-// sizes 2^2..2^10 pixels, u8 deltas where every block's span fits them, else
-// u16. Leaves the counts at u32 offsets when no compact encoding is smaller.
+// The compact offset encoding (format 1.2) when it is smaller than u32
+// offsets: u8 deltas where every 128-pixel block lists fewer than 256
+// references, else u16 where fewer than 65536, else none.
 void choose_offset_encoding(const std::vector<std::uint32_t>& offsets, tf::LayoutCounts& counts) {
-  std::uint32_t best = tf::pixel_offsets_bytes(counts);
-  for (std::uint8_t log2 = tf::kMinOffsetBlockLog2; log2 <= tf::kMaxOffsetBlockLog2; ++log2) {
-    std::uint32_t widest = 0;
-    for (std::size_t p = 0; p < offsets.size(); ++p) widest = std::max(widest, offsets[p] - offsets[(p >> log2) << log2]);
-    if (widest > 0xFFFF) continue;
-    tf::LayoutCounts c = counts;
-    c.offset_delta_bytes = widest <= 0xFF ? 1 : 2;
-    c.offset_block_log2 = log2;
-    if (tf::pixel_offsets_bytes(c) < best) {
-      best = tf::pixel_offsets_bytes(c);
-      counts.offset_delta_bytes = c.offset_delta_bytes;
-      counts.offset_block_log2 = log2;
-    }
+  const std::uint32_t pixels = counts.roi_pixels;
+  std::uint32_t widest = 0, non_empty = 0;
+  for (std::uint32_t first = 0; first < pixels; first += tf::kOffsetBlockPixels) {
+    const std::uint32_t last = std::min(pixels, first + tf::kOffsetBlockPixels);
+    widest = std::max(widest, offsets[last] - offsets[first]);
   }
+  for (std::uint32_t p = 0; p < pixels; ++p) non_empty += offsets[p + 1] > offsets[p];
+  if (widest > 0xFFFF) return;
+  tf::LayoutCounts c = counts;
+  c.offset_delta_bytes = widest <= 0xFF ? 1 : 2;
+  c.offset_delta_count = non_empty;
+  if (tf::pixel_offsets_bytes(c) < tf::pixel_offsets_bytes(counts)) counts = c;
 }
 
 }  // namespace
@@ -240,7 +238,8 @@ std::vector<std::byte> serialise_table(const ModelStack& model, const BuildOptio
   store_le<std::uint32_t>(b + off::kFlags, (images ? tf::kFlagModelImages : 0u) | (compact ? tf::kFlagCompactOffsets : 0u));
   if (compact) {
     store_le<std::uint8_t>(b + off::kOffsetDeltaBytes, counts.offset_delta_bytes);
-    store_le<std::uint8_t>(b + off::kOffsetBlockLog2, counts.offset_block_log2);
+    store_le<std::uint8_t>(b + off::kOffsetBlockLog2, tf::kOffsetBlockLog2);
+    store_le<std::uint32_t>(b + off::kOffsetDeltaCount, counts.offset_delta_count);
   }
   if (images) {
     store_le<std::uint32_t>(b + off::kModelImagesOffset, layout.model_images);
@@ -261,13 +260,27 @@ std::vector<std::byte> serialise_table(const ModelStack& model, const BuildOptio
     store_le<std::uint32_t>(d + co::kStencilSize, cells[c].stencil_size);
   }
   if (compact) {
-    const unsigned log2 = counts.offset_block_log2;
-    std::byte* deltas = b + layout.pixel_offsets + tf::align_up(tf::offset_block_count(pixels, counts.offset_block_log2) * 4);
-    for (std::uint32_t p = 0; p <= pixels; ++p) {
-      const std::uint32_t base = csr.offsets[(p >> log2) << log2];
-      if ((p & ((1u << log2) - 1)) == 0) store_le<std::uint32_t>(b + layout.pixel_offsets + std::size_t{p >> log2} * 4, base);
-      if (counts.offset_delta_bytes == 1) store_le<std::uint8_t>(deltas + p, static_cast<std::uint8_t>(csr.offsets[p] - base));
-      else store_le<std::uint16_t>(deltas + std::size_t{p} * 2, static_cast<std::uint16_t>(csr.offsets[p] - base));
+    // Per 128-pixel block: base, rank, mask; then each non-empty pixel's end less its block's base.
+    std::byte* blocks = b + layout.pixel_offsets;
+    std::byte* deltas = blocks + std::size_t{tf::offset_block_count(pixels)} * tf::kOffsetBlockHeaderBytes;
+    std::uint32_t rank = 0;
+    for (std::uint32_t block = 0; block < tf::offset_block_count(pixels); ++block) {
+      const std::uint32_t first = block * tf::kOffsetBlockPixels, base = csr.offsets[first];
+      std::uint64_t mask[2] = {0, 0};
+      const std::uint32_t block_rank = rank;
+      for (std::uint32_t p = first; p < std::min(pixels, first + tf::kOffsetBlockPixels); ++p) {
+        if (csr.offsets[p + 1] == csr.offsets[p]) continue;
+        mask[(p - first) / 64] |= std::uint64_t{1} << ((p - first) % 64);
+        const std::uint32_t end = csr.offsets[p + 1] - base;
+        if (counts.offset_delta_bytes == 1) store_le<std::uint8_t>(deltas + rank, static_cast<std::uint8_t>(end));
+        else store_le<std::uint16_t>(deltas + std::size_t{rank} * 2, static_cast<std::uint16_t>(end));
+        ++rank;
+      }
+      std::byte* h = blocks + std::size_t{block} * tf::kOffsetBlockHeaderBytes;
+      store_le<std::uint32_t>(h, base);
+      store_le<std::uint32_t>(h + 4, block_rank);
+      store_le<std::uint64_t>(h + 8, mask[0]);
+      store_le<std::uint64_t>(h + 16, mask[1]);
     }
   } else {
     for (std::uint32_t p = 0; p <= pixels; ++p) store_le<std::uint32_t>(b + layout.pixel_offsets + std::size_t{p} * 4, csr.offsets[p]);

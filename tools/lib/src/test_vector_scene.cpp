@@ -16,6 +16,7 @@
 #include "gabarit/deterministic_math.hpp"
 #include "gabarit/host/rng.hpp"
 #include "gabarit/host/synth.hpp"
+#include "gabarit/host/table_budget.hpp"
 #include "gabarit/host/table_builder.hpp"
 #include "gabarit/recovery_search.hpp"
 #include "gabarit/tracking_session.hpp"
@@ -77,7 +78,8 @@ VectorSceneSummary write_test_vectors(const VectorSceneOptions& o, const std::st
   if (o.model_points < 100 || o.model_points > 5000) throw app::Error("vectors: model points must be in 100..5000");
   if (o.depths < 1 || o.depths > 16) throw app::Error("vectors: depths must be in 1..16");
   if (o.frames < 1 || o.frames > 1000) throw app::Error("vectors: frames must be in 1..1000");
-  if (!(o.keep > 0 && o.keep <= 1)) throw app::Error("vectors: keep must be in (0, 1]");
+  if (!(o.keep >= 0 && o.keep <= 1)) throw app::Error("vectors: keep must be in (0, 1]");
+  if (o.keep == 0 && o.table_budget_bytes == 0) throw app::Error("vectors: give a table budget or a keep ratio");
   if (!(o.noise >= 0 && o.noise <= 1)) throw app::Error("vectors: noise must be in [0, 1]");
 
   ModelStack model;
@@ -93,7 +95,16 @@ VectorSceneSummary write_test_vectors(const VectorSceneOptions& o, const std::st
   build.space.theta = {-2.0f, 2.0f, 3};
   build.keep = o.keep;
   build.seed = o.seed;
-  const std::vector<std::byte> table_bytes = build_table(model, build);
+  BudgetReport budget_report;
+  std::vector<std::byte> table_bytes;
+  if (o.keep > 0) {
+    table_bytes = build_table(model, build);
+    budget_report.keep = o.keep;
+  } else {
+    Budget budget;
+    budget.max_bytes = o.table_budget_bytes;
+    table_bytes = build_table_to_budget(model, build, budget, budget_report);
+  }
   TableView table;
   if (const Status s = TableView::open(table_bytes, table); s != Status::kOk) throw app::Error(std::string("vectors: built table invalid: ") + status_name(s));
 
@@ -231,6 +242,8 @@ VectorSceneSummary write_test_vectors(const VectorSceneOptions& o, const std::st
   summary.session_bytes = session_file.size();
   summary.model_points = model.depths[0].size();
   summary.table_bytes = table_bytes.size();
+  summary.keep = budget_report.keep;
+  summary.margin = o.keep > 0 ? 0 : budget_report.margin;
   summary.vector_bytes = file.size();
   summary.cells = table.cell_count();
   summary.width = summary.height = side;

@@ -51,12 +51,16 @@ namespace gabarit::host {
 enum class Decimation { kStencil, kGlobal, kUniform };
 enum class RemovalWeight { kIdentity, kPower, kGreedy, kRival };
 
+// The default is Algorithm 2 with identity weights and the spread policy:
+// the best of the policies on the held-out shapes of gabarit bench
+// --decimation, one-step trials and continuous sequences alike
+// (docs/experiments.md, "Decimation").
 struct DecimationPolicy {
   Decimation method = Decimation::kStencil;
   RemovalWeight weight = RemovalWeight::kIdentity;
   std::uint32_t power = 2;  // kPower: 2 or 3
   bool most_overlapping = false;
-  bool spread = false;
+  bool spread = true;
   std::uint32_t min_area = 0;
 };
 

@@ -4,7 +4,8 @@
 // and serialisation only), so
 //   max_bytes   gives the table with the most references kept (the most
 //               robust, margins growing with what is kept) that fits in
-//               max_bytes, and
+//               max_bytes (and max_references, a hardware voter's
+//               reference memory, when given), and
 //   min_margin  gives the smallest table whose estimator margin of error
 //               (table_analysis.hpp) is at least min_margin pixels.
 // Both together: the smallest table meeting the margin, refused if it does
@@ -23,13 +24,15 @@
 namespace gabarit::host {
 
 struct Budget {
-  std::uint64_t max_bytes = 0;   // 0: no byte budget
-  std::uint32_t min_margin = 0;  // 0: no margin requirement
+  std::uint64_t max_bytes = 0;       // 0: no byte budget
+  std::uint32_t max_references = 0;  // 0: no reference budget (a voter's reference RAM, hdl/)
+  std::uint32_t min_margin = 0;      // 0: no margin requirement
 };
 
 struct BudgetReport {
   double keep = 1;            // the keep ratio chosen (BuildOptions::keep is ignored)
   std::size_t bytes = 0;
+  std::uint32_t references = 0;
   std::uint32_t margin = 0;   // the table's estimator margin of error
   bool margin_exact = false;  // 1-pixel translation cells (else estimated at cell centres)
   std::size_t builds = 0;     // tables serialised by the search

@@ -6,7 +6,9 @@
 // in which the object is hidden for a while, with the model images as its
 // focus stack (session.gbs).
 // The firmware embeds the same files, so the defaults are sized for an
-// STM32H7-class part (2 MiB flash, 512 KiB RAM) with the table decimated.
+// STM32H7-class part (2 MiB flash, 512 KiB RAM): the table is built to a
+// budget of half the flash (table_budget.hpp), the other half holding the
+// code and one vector file.
 #pragma once
 
 #include <cstdint>
@@ -18,7 +20,8 @@ struct VectorSceneOptions {
   std::uint32_t model_points = 1000;  // approximate feature count of depth 0
   std::uint16_t depths = 4;           // focus-stack images (each a slightly larger model)
   std::uint32_t frames = 8;
-  double keep = 0.2;                  // decimation: fraction of references kept
+  std::uint64_t table_budget_bytes = 1u << 20;  // the table: the most references that fit
+  double keep = 0;                    // > 0: this fraction of references instead of the budget
   double noise = 0.02;                // salt-and-pepper rate
   std::uint64_t seed = 1;
   // The session's sequence: session_frames frames, the object hidden from
@@ -32,6 +35,8 @@ struct VectorSceneOptions {
 struct VectorSceneSummary {
   std::size_t model_points = 0;       // depth 0
   std::size_t table_bytes = 0;
+  double keep = 0;                    // the fraction of references the table kept
+  std::uint32_t margin = 0;           // its margin of error (estimated at cell centres)
   std::size_t vector_bytes = 0;
   std::uint32_t cells = 0;
   std::uint32_t width = 0, height = 0;
