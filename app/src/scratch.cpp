@@ -20,10 +20,14 @@ TrackerBuffers::TrackerBuffers(const TableView& table, VoterChoice voter)
     masks_.resize(dense_mask_words(table.roi_pixels(), table.cell_count()));
     dense_scratch_.resize(dense_scratch_words(table.cell_count()));
     if (build_dense_masks(table, masks_) != Status::kOk) throw Error("internal error: building dense masks failed");
+  } else if (table.offset_delta_bytes() != 0) {
+    // The CSR voter on a compact table: decode its offsets once, not per feature.
+    expanded_.resize(expanded_offsets_count(table));
+    if (expand_offsets(table, expanded_) != Status::kOk) throw Error("internal error: expanding the offsets failed");
   }
 }
 
-TrackerScratch TrackerBuffers::scratch() { return {features_, counters_, mask_, masks_, dense_scratch_}; }
+TrackerScratch TrackerBuffers::scratch() { return {features_, counters_, mask_, masks_, dense_scratch_, expanded_}; }
 
 SessionBuffers::SessionBuffers(const TableView& fine, const TableView* coarse, VoterChoice voter, bool search_features)
     : fine_(fine, voter) {

@@ -1,6 +1,5 @@
 #include "gabarit/table_view.hpp"
 
-#include <bit>
 #include <cstring>
 
 #include "gabarit/assert.hpp"
@@ -68,7 +67,7 @@ Status check_compact_blocks(const std::byte* blocks, const std::byte* deltas, st
     if ((mask_lo & ~table_format::low_bits(inside)) != 0 || (mask_hi & ~table_format::low_bits(inside < 64 ? 0 : inside - 64)) != 0) {
       return Status::kOffsetsNotMonotonic;
     }
-    const auto marked = static_cast<std::uint32_t>(std::popcount(mask_lo) + std::popcount(mask_hi));
+    const auto marked = (table_format::count_bits(mask_lo) + table_format::count_bits(mask_hi));
     if (marked > delta_count - rank) return Status::kOffsetsNotMonotonic;
     std::uint32_t previous = 0;
     for (std::uint32_t k = 0; k < marked; ++k) {

@@ -187,6 +187,8 @@ Status track_step(const TableView& table, const Detector& detector, const ImageV
   VoteTally tally;
   if (!scratch.dense_masks.empty()) {
     GABARIT_TRY(accumulate_votes_dense(table, scratch.dense_masks, features, scratch.counters, scratch.dense_scratch, tally));
+  } else if (!scratch.expanded_offsets.empty()) {
+    GABARIT_TRY(accumulate_votes_expanded(table, scratch.expanded_offsets, features, scratch.counters, tally));
   } else {
     GABARIT_TRY(accumulate_votes(table, features, scratch.counters, tally));
   }

@@ -19,6 +19,13 @@ Status check_features(const TableView& table, std::span<const RoiPoint> features
   return Status::kOk;
 }
 
+// expand_offsets' output, read as the table's offsets.
+struct ExpandedOffsets {
+  const std::uint32_t* offsets;
+  std::uint32_t begin(std::size_t pixel) const noexcept { return offsets[pixel]; }
+  ReferenceRange range(std::size_t pixel) const noexcept { return {offsets[pixel], offsets[pixel + 1]}; }
+};
+
 inline void bump(VoteCounter* counters, std::uint32_t cell) noexcept {
   const VoteCounter c = counters[cell];
   counters[cell] = static_cast<VoteCounter>(c + (c != kVoteCounterMax));
@@ -46,9 +53,8 @@ void vote_scalar(const TableView& table, const Offsets& offsets, std::span<const
     return static_cast<std::uint32_t>(load_le<Ref>(refs + std::size_t{in_range} * sizeof(Ref)));
   };
   for (const RoiPoint& f : features) {
-    const std::size_t pixel = std::size_t{f.row} * w + f.col;
-    const std::uint32_t begin = offsets.begin(pixel);
-    const std::uint32_t end = offsets.begin(pixel + 1);
+    const ReferenceRange r = offsets.range(std::size_t{f.row} * w + f.col);
+    const std::uint32_t begin = r.begin, end = r.end;
     bump_by(counters, ref_at(begin), begin < end);
     bump_by(counters, ref_at(begin + 1), begin + 1 < end);
     for (std::uint32_t i = begin + 2; i < end; ++i) bump(counters, load_le<Ref>(refs + std::size_t{i} * sizeof(Ref)));
@@ -64,8 +70,9 @@ void vote_cell_range(const TableView& table, const Offsets& offsets, std::span<c
   const auto ref_at = [refs](std::uint32_t i) { return static_cast<std::uint32_t>(load_le<Ref>(refs + std::size_t{i} * sizeof(Ref))); };
   for (const RoiPoint& f : features) {
     const std::size_t pixel = std::size_t{f.row} * w + f.col;
-    std::uint32_t lo = offsets.begin(pixel);
-    const std::uint32_t end = offsets.begin(pixel + 1);
+    const ReferenceRange r = offsets.range(pixel);
+    std::uint32_t lo = r.begin;
+    const std::uint32_t end = r.end;
     // First reference >= cell_begin (lists are strictly increasing).
     std::uint32_t hi = end;
     while (lo < hi) {
@@ -117,6 +124,31 @@ Status accumulate_votes(const TableView& table, std::span<const RoiPoint> featur
       default: vote_scalar<std::uint32_t>(table, offsets, features, counters.data(), tally.votes); break;
     }
   });
+  tally.features += static_cast<std::uint32_t>(features.size());
+  return Status::kOk;
+}
+
+Status expand_offsets(const TableView& table, std::span<std::uint32_t> expanded) noexcept {
+  if (table.cell_count() == 0) return Status::kInvalidArgument;
+  if (expanded.size() != expanded_offsets_count(table)) return Status::kBufferTooSmall;
+  table.with_offsets([&](const auto& offsets) {
+    for (std::uint32_t p = 0; p <= table.roi_pixels(); ++p) expanded[p] = offsets.begin(p);
+  });
+  return Status::kOk;
+}
+
+Status accumulate_votes_expanded(const TableView& table, std::span<const std::uint32_t> expanded, std::span<const RoiPoint> features,
+                                 std::span<VoteCounter> counters, VoteTally& tally) noexcept {
+  GABARIT_TRY(check_counters(table, counters));
+  GABARIT_TRY(check_features(table, features));
+  if (expanded.size() != expanded_offsets_count(table)) return Status::kBufferTooSmall;
+  GABARIT_ASSERT(expanded.front() == 0 && expanded.back() == table.reference_count());
+  const ExpandedOffsets offsets{expanded.data()};
+  switch (table.reference_bytes()) {
+    case 1: vote_scalar<std::uint8_t>(table, offsets, features, counters.data(), tally.votes); break;
+    case 2: vote_scalar<std::uint16_t>(table, offsets, features, counters.data(), tally.votes); break;
+    default: vote_scalar<std::uint32_t>(table, offsets, features, counters.data(), tally.votes); break;
+  }
   tally.features += static_cast<std::uint32_t>(features.size());
   return Status::kOk;
 }

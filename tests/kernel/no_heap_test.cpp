@@ -98,6 +98,7 @@ int main() {
   std::vector<std::uint64_t> masks(dense_mask_words(table.roi_pixels(), table.cell_count()));
   std::vector<std::uint64_t> dense_scratch(dense_scratch_words(table.cell_count()));
   if (build_dense_masks(table, masks) != Status::kOk) return 2;
+  std::vector<std::uint32_t> expanded(expanded_offsets_count(table));
   const TrackerScratch scratch{features, counters, mask};
   const TrackerScratch dense{features, counters, mask, masks, dense_scratch};
   const ImageView view = frame.view();
@@ -130,6 +131,8 @@ int main() {
            accumulate_votes(table, std::span(features).first(c.written), counters, tally) == Status::kOk &&
            accumulate_votes_dense(table, masks, std::span(features).first(c.written), counters, dense_scratch, tally) == Status::kOk &&
            build_dense_masks(table, masks) == Status::kOk &&
+           expand_offsets(table, expanded) == Status::kOk &&
+           accumulate_votes_expanded(table, expanded, std::span(features).first(c.written), counters, tally) == Status::kOk &&
            select_top_cells(table, counters, top) == Status::kOk;
   });
   expect_no_allocation("track_step", [&] { StepResult r; return track_step(table, view, Pose{32, 32, 0, 0}, scratch, r) == Status::kOk; });

@@ -70,6 +70,16 @@ TEST(Voter, EveryOffsetEncodingVotesWhatItsListsSay) {
       for (std::uint32_t i = t.references_begin(p); i < t.references_begin(p + 1); ++i) ++expected[t.reference(i)];
     }
     EXPECT_EQ(counters, expected) << "round " << round;
+    // And through the offsets expanded once (what hosted programs do for a compact table).
+    std::vector<std::uint32_t> expanded(expanded_offsets_count(t));
+    ASSERT_EQ(expand_offsets(t, expanded), Status::kOk);
+    std::vector<VoteCounter> again(t.cell_count(), 0);
+    VoteTally tally_again;
+    ASSERT_EQ(accumulate_votes_expanded(t, expanded, features, again, tally_again), Status::kOk);
+    EXPECT_EQ(again, expected) << "round " << round;
+    EXPECT_EQ(tally_again.votes, tally.votes);
+    expanded.pop_back();
+    EXPECT_EQ(accumulate_votes_expanded(t, expanded, features, again, tally_again), Status::kBufferTooSmall);
   }
   EXPECT_TRUE(encodings.count(0) && (encodings.count(1) || encodings.count(2)));
 }

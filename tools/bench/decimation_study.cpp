@@ -224,8 +224,11 @@ std::vector<VoteTiming> time_voting(const Shape& shape, const std::vector<double
           const auto t0 = Clock::now();
           Status st = clear_counters(table, sc.counters);
           if (st == Status::kOk) {
-            st = sc.dense_masks.empty() ? accumulate_votes(table, features[i], sc.counters, tally)
-                                        : accumulate_votes_dense(table, sc.dense_masks, features[i], sc.counters, sc.dense_scratch, tally);
+            // As track_step votes: dense masks, else the expanded offsets of a compact table, else its own.
+            st = !sc.dense_masks.empty()
+                     ? accumulate_votes_dense(table, sc.dense_masks, features[i], sc.counters, sc.dense_scratch, tally)
+                 : !sc.expanded_offsets.empty() ? accumulate_votes_expanded(table, sc.expanded_offsets, features[i], sc.counters, tally)
+                                                : accumulate_votes(table, features[i], sc.counters, tally);
           }
           sum[which] += std::chrono::duration<double, std::micro>(Clock::now() - t0).count();
           if (st != Status::kOk) throw app::Error("bench: voting failed");

@@ -38,20 +38,21 @@ constexpr std::size_t dense_mask_words(std::uint32_t roi_pixels, std::uint32_t c
 constexpr std::size_t dense_scratch_words(std::uint32_t cells) noexcept { return 19 * dense_words_per_pixel(cells); }
 
 // The cost model that picks a voter per table (gabarit track --voter auto,
-// gabarit-board, the firmware): per feature, the CSR voter costs about
-// 9 + 1.55 r ns for r references per feature pixel (a fixed part: the
-// list's bounds and a branch; then a counter per reference), the dense voter
-// about 1 + 2.6 w ns for w mask words (cells / 64, rounded up), whatever the
-// references. r is estimated as references / ROI pixels, which is what
-// uniformly spread clutter votes (features on the object vote a little more).
-// Fitted on a 2-core x86-64 at 20% salt-and-pepper noise against 121 to 847
-// cells and 0.2 to 59 references per feature (gabarit bench --decimation,
-// "Voting time"); both voters give the same counters, so a wrong guess costs
-// time only. Dense pays off when 2.6 w < 8 + 1.55 r, in integers below.
+// gabarit-board). Per feature pixel with r references, the CSR voter costs
+// about 1 + 0.5 r (in units of a few ns: the list's bounds, then a counter
+// per reference), the dense voter about 0.5 w + 0.2 r for w mask words
+// (cells / 64, rounded up; sparser masks ripple fewer carries), so dense
+// pays off when w < 2 + 0.6 r. r is estimated as references / ROI pixels,
+// what uniformly spread clutter votes. Fitted to the voting times of gabarit
+// bench --decimation ("Voting time": 121 to 847 cells, 0.2 to 59 references
+// per feature, 20% salt-and-pepper, a 2-core x86-64, CSR with u32 offsets or
+// compact ones expanded once, as hosted programs do): it picks the faster
+// voter in 19 of those 20 cases and costs 10% over always picking the
+// faster. Both voters give the same counters: a wrong guess costs time only.
 constexpr bool dense_voter_pays_off(std::uint32_t cells, std::uint32_t roi_pixels, std::uint32_t references) noexcept {
   if (cells == 0 || cells > kDenseMaxCells || roi_pixels == 0) return false;
   const std::uint64_t words = dense_words_per_pixel(cells);
-  return 52 * words * roi_pixels < 160ull * roi_pixels + 31ull * references;
+  return 5 * words * roi_pixels < 10ull * roi_pixels + 3ull * references;
 }
 inline bool dense_voter_pays_off(const TableView& table) noexcept {
   return dense_voter_pays_off(table.cell_count(), table.roi_pixels(), table.reference_count());

@@ -30,8 +30,23 @@ inline constexpr std::uint8_t kOffsetBlockLog2 = 7;
 inline constexpr std::uint32_t kOffsetBlockPixels = 1u << kOffsetBlockLog2;
 inline constexpr std::uint32_t kOffsetBlockHeaderBytes = 24;
 
-// The mask bits of a block below position i (0..128), in its two words.
-constexpr std::uint64_t low_bits(std::uint32_t n) noexcept { return n >= 64 ? ~std::uint64_t{0} : (std::uint64_t{1} << n) - 1; }
+// The n lowest bits (all 64 for n >= 64), without a branch (the voter's hot
+// loop meets random pixels: a mispredicted branch costs more than the decode).
+constexpr std::uint64_t low_bits(std::uint32_t n) noexcept {
+  return ((std::uint64_t{1} << (n & 63)) - 1) | (std::uint64_t{0} - std::uint64_t{n >= 64});
+}
+// Bits set in x, inline on every target: without a population-count
+// instruction (baseline x86-64, Cortex-M) std::popcount is a library call,
+// which in the voter's hot loop costs more than this.
+constexpr std::uint32_t count_bits(std::uint64_t x) noexcept {
+  x = x - ((x >> 1) & 0x5555555555555555ull);
+  x = (x & 0x3333333333333333ull) + ((x >> 2) & 0x3333333333333333ull);
+  x = (x + (x >> 4)) & 0x0F0F0F0F0F0F0F0Full;
+  return static_cast<std::uint32_t>((x * 0x0101010101010101ull) >> 56);
+}
+static_assert(count_bits(0) == 0 && count_bits(~std::uint64_t{0}) == 64 && count_bits(0x8000000000000001ull) == 2);
+static_assert(low_bits(0) == 0 && low_bits(5) == 31 && low_bits(63) == ~std::uint64_t{0} >> 1 && low_bits(64) == ~std::uint64_t{0} &&
+              low_bits(128) == ~std::uint64_t{0});
 
 inline constexpr std::uint32_t kHeaderBytes = 160;
 inline constexpr std::uint32_t kCellDescriptorBytes = 32;

@@ -6,7 +6,6 @@
 #pragma once
 
 #include <cstddef>
-#include <bit>
 #include <cstdint>
 #include <span>
 
@@ -53,9 +52,14 @@ struct ModelPoint {
 // docs/table-format.md; begin(p) is the index of pixel p's first reference,
 // begin(p + 1) one past its last. The voters are templates over them, so
 // each encoding's hot loop is compiled on its own.
+// range(p) is {begin(p), begin(p + 1)} in one decode (precondition: p < roi_pixels).
+struct ReferenceRange {
+  std::uint32_t begin, end;
+};
 struct WideOffsets {
   const std::byte* offsets;
   std::uint32_t begin(std::size_t pixel) const noexcept { return load_le<std::uint32_t>(offsets + pixel * 4); }
+  ReferenceRange range(std::size_t pixel) const noexcept { return {begin(pixel), begin(pixel + 1)}; }
 };
 template <class Delta>
 struct CompactOffsets {
@@ -64,10 +68,31 @@ struct CompactOffsets {
   std::uint32_t begin(std::size_t pixel) const noexcept {
     const std::byte* h = blocks + (pixel >> table_format::kOffsetBlockLog2) * table_format::kOffsetBlockHeaderBytes;
     const auto i = static_cast<std::uint32_t>(pixel & (table_format::kOffsetBlockPixels - 1));
-    const auto j = static_cast<std::uint32_t>(std::popcount(load_le<std::uint64_t>(h + 8) & table_format::low_bits(i)) +
-                                              std::popcount(load_le<std::uint64_t>(h + 16) & table_format::low_bits(i < 64 ? 0 : i - 64)));
+    const auto j = (table_format::count_bits(load_le<std::uint64_t>(h + 8) & table_format::low_bits(i)) +
+                                              table_format::count_bits(load_le<std::uint64_t>(h + 16) & table_format::low_bits(i < 64 ? 0 : i - 64)));
     const std::uint32_t base = load_le<std::uint32_t>(h);
     return j == 0 ? base : base + load_le<Delta>(deltas + std::size_t{load_le<std::uint32_t>(h + 4) + j - 1} * sizeof(Delta));
+  }
+  // One block header, no branch (the hot loop meets random pixels, where a
+  // mispredicted branch costs more than the decode): an empty pixel (its
+  // bit clear) is {begin, begin}, a marked one ends at its own delta. The
+  // two deltas around the pixel's rank are read whatever the pixel: before
+  // the first that reads the block headers, past the last the next section
+  // (references, or model counts of at least one depth), inside the table.
+  ReferenceRange range(std::size_t pixel) const noexcept {
+    const std::byte* h = blocks + (pixel >> table_format::kOffsetBlockLog2) * table_format::kOffsetBlockHeaderBytes;
+    const auto i = static_cast<std::uint32_t>(pixel & (table_format::kOffsetBlockPixels - 1));
+    const std::uint64_t lo = load_le<std::uint64_t>(h + 8), hi = load_le<std::uint64_t>(h + 16);
+    const std::uint32_t lo_bits = i < 64 ? i : 64;
+    const auto j = (table_format::count_bits(lo & table_format::low_bits(lo_bits)) +
+                                              table_format::count_bits(hi & table_format::low_bits(i - lo_bits)));
+    const std::uint64_t word = i < 64 ? lo : hi;
+    const auto marked = static_cast<std::uint32_t>((word >> (i & 63)) & 1u);
+    const std::uint32_t base = load_le<std::uint32_t>(h);
+    const std::byte* at = deltas + std::size_t{load_le<std::uint32_t>(h + 4) + j} * sizeof(Delta);
+    const std::uint32_t before = load_le<Delta>(at - sizeof(Delta)), own = load_le<Delta>(at);
+    const std::uint32_t begin = base + (before & (0u - static_cast<std::uint32_t>(j != 0)));
+    return {begin, begin + ((base + own - begin) & (0u - marked))};
   }
 };
 

@@ -71,6 +71,10 @@ struct TrackerScratch {
   // bit-identical either way.
   std::span<const std::uint64_t> dense_masks = {};
   std::span<std::uint64_t> dense_scratch = {};
+  // Optional, without dense masks: a compact table's offsets expanded once
+  // (voter.hpp, expand_offsets), so the CSR voter skips their decode. Empty:
+  // the table's own offsets. Results are bit-identical either way.
+  std::span<const std::uint32_t> expanded_offsets = {};
 };
 
 struct StepResult {

@@ -38,6 +38,7 @@ std::string inspect_json(const TableView& t) {
   o << "  \"bytes\": " << t.size_bytes() << ",\n  \"cells\": " << t.cell_count() << ",\n";
   o << "  \"references\": " << t.reference_count() << ",\n";
   o << "  \"reference_bytes\": " << unsigned{t.reference_bytes()} << ",\n";
+  o << "  \"offsets\": \"" << (t.offset_delta_bytes() == 0 ? "u32" : t.offset_delta_bytes() == 1 ? "compact u8" : "compact u16") << "\",\n";
   o << "  \"bytes_per_cell\": " << static_cast<double>(t.size_bytes()) / t.cell_count() << ",\n";
   o << "  \"roi\": {\"width\": " << t.roi_width() << ", \"height\": " << t.roi_height()
     << ", \"origin_x\": " << t.roi_origin_x() << ", \"origin_y\": " << t.roi_origin_y() << "},\n";

@@ -33,6 +33,7 @@ class TrackerBuffers {
   std::vector<VoteCounter> counters_;
   std::vector<std::uint8_t> mask_;
   std::vector<std::uint64_t> masks_, dense_scratch_;
+  std::vector<std::uint32_t> expanded_;  // a compact table's offsets, for the CSR voter
 };
 
 // Scratch for a TrackingSession: the fine table's, the coarse table's when
