@@ -96,6 +96,17 @@ TableFile::TableFile(const std::string& path) {
 }
 
 OutputFile::OutputFile(std::string path) : path_(std::move(path)) {
+  // An existing output that is not a regular file (/dev/null, a FIFO, a
+  // terminal) is written through: renaming a temporary over it would
+  // replace the device or pipe with a regular file.
+  struct stat st {};
+  if (::stat(path_.c_str(), &st) == 0 && !S_ISREG(st.st_mode)) {
+    if (S_ISDIR(st.st_mode)) throw Error(path_ + ": cannot create: is a directory");
+    file_ = std::fopen(path_.c_str(), "wb");
+    if (file_ == nullptr) throw Error(path_ + ": cannot create: " + std::strerror(errno));
+    direct_ = true;
+    return;
+  }
   const std::filesystem::path target(path_);
   const std::string dir = target.has_parent_path() ? target.parent_path().string() : std::string(".");
   std::string name = dir + "/." + target.filename().string() + ".tmp.XXXXXX";
@@ -134,6 +145,14 @@ void OutputFile::write(std::span<const std::byte> bytes) {
 
 void OutputFile::commit() {
   if (file_ == nullptr) throw Error(path_ + ": committed twice");
+  if (direct_) {
+    const bool ok = std::fflush(file_) == 0;
+    const int e = errno;
+    const bool closed = std::fclose(file_) == 0;
+    file_ = nullptr;
+    if (failed_ || !ok || !closed) throw Error(path_ + ": write failed: " + std::strerror(e != 0 ? e : EIO));
+    return;
+  }
   const bool flushed = std::fflush(file_) == 0 && ::fsync(::fileno(file_)) == 0;
   const int flush_errno = errno;
   const bool closed = std::fclose(file_) == 0;

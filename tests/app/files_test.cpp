@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <fstream>
 #include <stdexcept>
+#include <thread>
 
 #include "gabarit/app/args.hpp"
 #include "gabarit/app/error.hpp"
@@ -106,6 +107,27 @@ TEST(OutputFile, ReplacesItsFileOnlyWhenCommitted) {
   ASSERT_EQ(::stat(path.c_str(), &st), 0);
   EXPECT_EQ(st.st_mode & 0777, 0666 & ~mask);
   EXPECT_THROW(app::OutputFile((d / "no-such-dir" / "x").string()), app::Error);
+  fs::remove_all(d);
+}
+
+// `-o /dev/null` (or a FIFO) is written through: renaming a temporary over it
+// would have replaced the device with a regular file, for every program after.
+TEST(OutputFile, AnExistingFifoIsWrittenThroughAndStaysAFifo) {
+  const fs::path d = temp_dir("gabarit-fifo");
+  const std::string path = (d / "pipe").string();
+  ASSERT_EQ(::mkfifo(path.c_str(), 0600), 0);
+  std::string received;
+  std::thread reader([&] { received = slurp(path); });  // opening for reading waits for the writer
+  app::write_file(path, std::string_view("through the pipe\n"));
+  reader.join();
+  EXPECT_EQ(received, "through the pipe\n");
+  struct stat st {};
+  ASSERT_EQ(::stat(path.c_str(), &st), 0);
+  EXPECT_TRUE(S_ISFIFO(st.st_mode)) << "the FIFO was replaced";
+  std::size_t entries = 0;
+  for (const auto& e : fs::directory_iterator(d)) entries += e.path().filename() != "pipe" ? 1 : 0;
+  EXPECT_EQ(entries, 0u) << "a temporary was left beside the FIFO";
+  EXPECT_THROW(app::OutputFile(d.string()), app::Error);  // a directory is refused
   fs::remove_all(d);
 }
 

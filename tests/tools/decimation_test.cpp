@@ -179,9 +179,9 @@ TEST(Decimation, NamesParse) {
   EXPECT_EQ(p.power, 3u);
   EXPECT_THROW(parse_removal_weight("power:4", p), app::Error);
   p.most_overlapping = true;
-  EXPECT_EQ(describe(p), "stencil, power:3, most-overlapping, spread");
-  p.spread = false;
   EXPECT_EQ(describe(p), "stencil, power:3, most-overlapping");
+  p.spread = true;
+  EXPECT_EQ(describe(p), "stencil, power:3, most-overlapping, spread");
 }
 
 }  // namespace

@@ -438,7 +438,7 @@ int run_decimation_study(const DecimationStudyOptions& o) {
       double us = 0;
       std::size_t bytes = 0, count = 0;
       for (const auto& r : seq)
-        if (r.shape == s.shape.name && r.policy == "stencil spread" && r.keep == k) us += r.mean_us, bytes = r.table_bytes, ++count;
+        if (r.shape == s.shape.name && r.policy == "stencil" && r.keep == k) us += r.mean_us, bytes = r.table_bytes, ++count;
       us /= std::max<std::size_t>(1, count);
       if (k == 1.0) full_us = us, full_bytes = bytes;
       char line[160];
@@ -453,7 +453,7 @@ int run_decimation_study(const DecimationStudyOptions& o) {
     for (double n : noises) yl.push_back(percent(n));
     std::vector<std::vector<double>> wrong(noises.size(), std::vector<double>(keeps.size(), 0)), time = wrong;
     for (const auto& r : seq) {
-      if (r.shape != s.shape.name || r.policy != "stencil spread") continue;
+      if (r.shape != s.shape.name || r.policy != "stencil") continue;
       const auto ni = static_cast<std::size_t>(std::find(noises.begin(), noises.end(), r.noise) - noises.begin());
       const auto ki = static_cast<std::size_t>(std::find(keeps.begin(), keeps.end(), r.keep) - keeps.begin());
       wrong[ni][ki] = static_cast<double>(r.frames - r.exact);

@@ -56,8 +56,7 @@ int tables_build(const std::vector<std::string>& argv) {
               "                          (default), n^K (K = 2, 3), always the most overlapped pixel, or by how alike\n"
               "                          the stencils sharing the pixel are"},
              {"--most-overlapping", "", "stencil decimation: remove first the pixels shared with the most overlapping stencil"},
-             {"--no-spread", "", "stencil decimation: without the spread policy (a neighbourhood map that spreads\n"
-              "                          removals evenly; on by default)"},
+             {"--spread", "", "stencil decimation: spread removals evenly (a neighbourhood map)"},
              {"--min-area", "N", "stencil decimation: keep at least N references per stencil (default 0: keep x size, at least 1)"},
              {"--max-bytes", "N", "build to a budget instead of --keep: the table keeping the most references that fits\n"
               "                          in N bytes (a flash or BRAM budget); reports its margin of error"},
@@ -152,7 +151,7 @@ int tables_build(const std::vector<std::string>& argv) {
   bo.decimation.method = host::parse_decimation(args.get_or("--decimation", "stencil"));
   if (args.has("--weight")) host::parse_removal_weight(args.get("--weight"), bo.decimation);
   bo.decimation.most_overlapping = args.has("--most-overlapping");
-  bo.decimation.spread = !args.has("--no-spread");
+  bo.decimation.spread = args.has("--spread");
   bo.decimation.min_area = static_cast<std::uint32_t>(args.integer("--min-area", 0, 0, 1 << 24));
   if (isatty(STDERR_FILENO)) {
     bo.progress = [](std::size_t done, std::size_t total) {

@@ -1,5 +1,6 @@
 #include "gabarit/host/table_budget.hpp"
 
+#include <algorithm>
 #include <string>
 
 #include "gabarit/app/error.hpp"
@@ -92,14 +93,31 @@ std::vector<std::byte> build_table_to_budget(const ModelStack& model, const Buil
                          std::to_string(smallest.empty() ? 0 : open_built(smallest).reference_count()) + " references, above " +
                          budget_text() + ": use fewer cells, a smaller ROI, or leave the model images out (--no-model-images)");
       }
-      // The largest keep that fits: lo always fits.
-      double lo = kSmallestKeep, hi = 1.0;
+      // The largest keep that fits: lo always fits, hi never does. With one
+      // budget the next keep is interpolated (regula falsi, kept a tenth of
+      // the bracket away from its ends so it always shrinks): a table's
+      // size is close to linear in keep, so a few builds reach the budget.
+      // Stops once within 0.1% of it; with both budgets, bisection.
+      const bool one_budget = (budget.max_bytes == 0) != (budget.max_references == 0);
+      const auto measure = [&](const std::vector<std::byte>& t) {
+        return budget.max_bytes ? static_cast<double>(t.size()) : static_cast<double>(open_built(t).reference_count());
+      };
+      const double limit = budget.max_bytes ? static_cast<double>(budget.max_bytes) : static_cast<double>(budget.max_references);
+      double lo = kSmallestKeep, hi = 1.0, at_lo = measure(smallest), at_hi = measure(table);
       table = std::move(smallest);
       for (int i = 0; i < kBisectionSteps && hi - lo > 1e-5; ++i) {
-        const double mid = (lo + hi) / 2;
+        double mid = (lo + hi) / 2;
+        if (one_budget && at_hi > at_lo) {
+          const double guess = lo + (limit - at_lo) / (at_hi - at_lo) * (hi - lo);
+          mid = std::clamp(guess, lo + 0.1 * (hi - lo), hi - 0.1 * (hi - lo));
+        }
         std::vector<std::byte> t = build_at(mid);
-        if (fits(t)) lo = mid, table = std::move(t);
-        else hi = mid;
+        if (fits(t)) {
+          lo = mid, at_lo = measure(t), table = std::move(t);
+          if (one_budget && at_lo >= limit - limit / 1000) break;
+        } else {
+          hi = mid, at_hi = t.empty() ? at_hi : measure(t);
+        }
       }
       chosen = lo;
     }

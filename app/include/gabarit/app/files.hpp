@@ -52,7 +52,9 @@ class TableFile {
 
 class OutputFile {
  public:
-  // Creates the temporary beside `path`. Throws app::Error "PATH: cannot create: ...".
+  // Creates the temporary beside `path`, or, when `path` exists and is not a
+  // regular file (/dev/null, a FIFO), opens it to write through. Throws
+  // app::Error "PATH: cannot create: ...".
   explicit OutputFile(std::string path);
   ~OutputFile();  // without commit(): the temporary is removed, `path` untouched
   OutputFile(const OutputFile&) = delete;
@@ -71,6 +73,7 @@ class OutputFile {
   std::string path_, temporary_;
   std::FILE* file_ = nullptr;
   bool failed_ = false;
+  bool direct_ = false;  // an existing non-regular file (a device, a FIFO): written through
 };
 
 // write_file: an OutputFile written and committed.
