@@ -28,5 +28,22 @@ TEST(Crc32, UpdatesIncrementally) {
   }
 }
 
+TEST(Crc32c, MatchesTheStandardCheckValue) {
+  EXPECT_EQ(crc32c(bytes_of("123456789")), 0xE3069283u);  // the CRC-32/ISCSI check value
+  EXPECT_EQ(crc32c({}), 0u);
+  // RFC 3720 B.4: 32 bytes of zeros.
+  const std::vector<std::byte> zeros(32, std::byte{0});
+  EXPECT_EQ(crc32c(zeros), 0x8A9136AAu);
+}
+
+TEST(Crc32c, UpdatesIncrementallyAndDiffersFromCrc32) {
+  const auto all = bytes_of("The quick brown fox jumps over the lazy dog");
+  const std::span<const std::byte> s(all);
+  EXPECT_NE(crc32c(s), crc32(s));
+  for (std::size_t cut = 0; cut <= all.size(); ++cut) {
+    EXPECT_EQ(crc32c_update(crc32c(s.first(cut)), s.subspan(cut)), crc32c(s)) << "cut at " << cut;
+  }
+}
+
 }  // namespace
 }  // namespace gabarit
