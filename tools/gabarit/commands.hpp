@@ -15,5 +15,6 @@ int synth(const std::vector<std::string>& args);
 int track(const std::vector<std::string>& args);
 int eval(const std::vector<std::string>& args);
 int vectors(const std::vector<std::string>& args);
+int hil(const std::vector<std::string>& args);
 
 }  // namespace gabarit::cli

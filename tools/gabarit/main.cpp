@@ -27,6 +27,7 @@ constexpr const char* kUsage =
     "  track            track a model through a sequence\n"
     "  eval             compare tracked poses with ground truth\n"
     "  vectors          write the cross-target test vectors (table, frames, expected results)\n"
+    "  hil run          replay a sequence into a device under test, check and report (HIL)\n"
     "  bench            re-measure the thesis's synthetic experiments (runs gabarit-bench)\n";
 
 // `gabarit bench` runs gabarit-bench from this executable's directory: the
@@ -70,6 +71,10 @@ int main(int argc, char** argv) {
     if (command == "track") return gabarit::cli::track(args);
     if (command == "eval") return gabarit::cli::eval(args);
     if (command == "vectors") return gabarit::cli::vectors(args);
+    if (command == "hil") {
+      if (!args.empty() && args[0] == "run") command += " run";
+      return gabarit::cli::hil(args);
+    }
     throw gabarit::app::UsageError("unknown command '" + command + "'");
   } catch (const gabarit::app::UsageError& e) {
     std::fprintf(stderr, "gabarit %s: %s\n(see gabarit %s --help)\n", command.c_str(), e.what(),

@@ -32,6 +32,15 @@ std::uint32_t DutEndpoint::queued() const noexcept {
   return n;
 }
 
+std::uint32_t DutEndpoint::oldest_queued() const noexcept {
+  std::uint32_t oldest = kNoFrame;
+  for (std::uint32_t s = 0; s < caps_.frame_slots; ++s) {
+    if (slots_[s].state != SlotState::kReady && slots_[s].state != SlotState::kOut) continue;
+    if (oldest == kNoFrame || seq_after(oldest, slots_[s].frame_id)) oldest = slots_[s].frame_id;
+  }
+  return oldest;
+}
+
 void DutEndpoint::send(MessageType type, std::span<const std::byte> payload) noexcept {
   Header h;
   h.type = type;
@@ -100,7 +109,10 @@ void DutEndpoint::on_message(std::span<const std::byte> message) noexcept {
         ++stats_.bad_message;
         return;
       }
-      const Pong pong{ping.token, ping.host_time_us, app_.now(), newest_, queued()};
+      // The host pings only between frames: a frame still being assembled
+      // can no longer complete, and is answered before the PONG.
+      drop_filling(EventReason::kIncomplete);
+      const Pong pong{ping.token, ping.host_time_us, app_.now(), newest_, queued(), oldest_queued()};
       std::byte out[kPongBytes];
       send(MessageType::kPong, std::span<const std::byte>(out, encode(pong, out)));
       return;

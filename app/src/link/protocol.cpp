@@ -387,6 +387,7 @@ std::size_t encode(const Pong& m, std::span<std::byte> out) noexcept {
   w.u64(m.dut_time);
   w.u32(m.last_frame);
   w.u32(m.queued);
+  w.u32(m.oldest_queued);
   return w.done();
 }
 
@@ -397,6 +398,7 @@ Status decode(std::span<const std::byte> payload, Pong& m) noexcept {
   m.dut_time = r.u64();
   m.last_frame = r.u32();
   m.queued = r.u32();
+  m.oldest_queued = r.u32();
   return r.status();
 }
 

@@ -9,7 +9,8 @@
 // (next_frame). Each frame it takes gets exactly one answer: a POSE
 // (report_pose) or an EVENT (report_failure, or its own: dropped incomplete,
 // queue full). Frames it never takes whole are answered with an EVENT when it
-// learns of them: a gap in a frame's fragments, a frame older than one taken.
+// learns of them: a gap in a frame's fragments, a frame older than one taken,
+// a PING while a frame is still incomplete (the host pings only between frames).
 #pragma once
 
 #include <cstddef>
@@ -81,6 +82,7 @@ class DutEndpoint {
   bool bye_received() const noexcept { return bye_; }
   const Stats& stats() const noexcept { return stats_; }
   std::uint32_t queued() const noexcept;  // frames taken, not yet reported
+  std::uint32_t oldest_queued() const noexcept;  // the oldest of them (kNoFrame: none)
 
  private:
   enum class SlotState : std::uint8_t { kFree, kFilling, kReady, kOut };

@@ -196,8 +196,9 @@ struct Pong {
   std::uint64_t dut_time = 0;
   std::uint32_t last_frame = kNoFrame;  // the newest frame id taken (complete) this run
   std::uint32_t queued = 0;             // frames taken and not yet answered
+  std::uint32_t oldest_queued = kNoFrame;  // the oldest of them: every older frame taken is answered
 };
-inline constexpr std::size_t kPongBytes = 28;
+inline constexpr std::size_t kPongBytes = 32;
 
 // The DUT's counters since its start (a request is an empty STATS).
 struct Stats {

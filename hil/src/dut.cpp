@@ -1,0 +1,364 @@
+#include "gabarit/hil/dut.hpp"
+
+#include <fcntl.h>
+#include <poll.h>
+#include <signal.h>
+#include <sys/socket.h>
+#include <sys/un.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <cerrno>
+#include <cstring>
+#include <fstream>
+#include <iterator>
+
+#include "gabarit/app/error.hpp"
+#include "gabarit/app/files.hpp"
+#include "gabarit/app/session_dut.hpp"
+#include "gabarit/crc32.hpp"
+
+namespace gabarit::hil {
+namespace {
+
+std::uint64_t steady_micros() {
+  return static_cast<std::uint64_t>(
+      std::chrono::duration_cast<std::chrono::microseconds>(Clock::now().time_since_epoch()).count());
+}
+
+// ---- in-process
+
+class LoopbackOutput final : public link::MessageOutput {
+ public:
+  explicit LoopbackOutput(Transport& end) : end_(end) {}
+  void send(std::span<const std::byte> message) noexcept override {
+    try {
+      end_.send(message, Clock::now() + std::chrono::seconds(1));
+    } catch (const std::exception&) {
+      closed = true;  // the harness went away: the thread ends
+    }
+  }
+  bool closed = false;
+
+ private:
+  Transport& end_;
+};
+
+class InprocessDut final : public DutDriver {
+ public:
+  explicit InprocessDut(const InprocessOptions& o) : options_(o), table_(o.table_path) {}
+  ~InprocessDut() override { stop(); }
+  std::string kind() const override { return "inprocess"; }
+  std::chrono::milliseconds default_hang_timeout() const override { return std::chrono::milliseconds(5000); }
+  std::chrono::milliseconds stall_interval() const override { return std::chrono::milliseconds(5); }
+  std::string description() const override {
+    return std::string("the kernel's TrackingSession on a thread, behind ") + (options_.udp ? "UDP on 127.0.0.1" : "a loopback link") +
+           (options_.plain ? " (plain loop)" : "");
+  }
+
+  void start() override {
+    stop();
+    std::shared_ptr<Transport> device;
+    if (options_.udp) {
+      auto host = std::make_unique<UdpTransport>("127.0.0.1", 0);
+      auto dev = std::make_shared<UdpTransport>("127.0.0.1", host->local_port());
+      host->set_peer(dev->local_port());
+      host_ = std::move(host);
+      device = std::move(dev);
+    } else {
+      loopback_ = std::make_unique<Loopback>();
+      host_ = loopback_->host_end();
+      device.reset(loopback_->device_end().release());
+    }
+    stopping_ = false;
+    thread_ = std::thread([this, device] { run(*device); });
+  }
+
+  void stop() noexcept override {
+    stopping_ = true;
+    if (loopback_) loopback_->close();
+    if (thread_.joinable()) thread_.join();
+    host_.reset();
+    loopback_.reset();
+  }
+
+  Transport& transport() override { return *host_; }
+
+ private:
+  void run(Transport& end) noexcept {
+    try {
+      app::SessionDut app(table_.view(), options_.plain, &steady_micros);
+      link::Caps caps;
+      caps.max_payload = options_.max_payload;
+      caps.table_crc = crc32(table_.bytes());
+      caps.table_bytes = static_cast<std::uint32_t>(table_.bytes().size());
+      caps.clock_hz = 1000000;
+      caps.frame_slots = options_.frame_slots;
+      caps.max_frame_bytes = 1024u * 1024u;
+      caps.mode = app.mode();
+      link::set_text(caps.kind, "inprocess");
+      link::set_text(caps.board, "host thread");
+      link::set_text(caps.firmware, "gabarit 0.1.0");
+      caps.device_id = crc32(std::as_bytes(std::span("inprocess/host thread")));
+      std::vector<std::uint8_t> memory(link::dut_frame_memory_bytes(caps.frame_slots, caps.max_frame_bytes));
+      LoopbackOutput out(end);
+      link::DutEndpoint endpoint(caps, memory, app, out);
+      while (!out.closed && !stopping_) {
+        // Drain what has arrived, then track one frame; wait only when idle.
+        bool idle = true;
+        while (auto m = end.receive(Clock::now())) {
+          endpoint.on_message(*m);
+          idle = false;
+        }
+        if (app.track_next(endpoint)) continue;
+        if (idle) {
+          if (auto m = end.receive(Clock::now() + std::chrono::milliseconds(50))) endpoint.on_message(*m);
+        }
+      }
+    } catch (const std::exception&) {
+      // The loopback closed (stop()): the DUT powers off.
+    }
+  }
+
+  InprocessOptions options_;
+  app::TableFile table_;
+  std::unique_ptr<Loopback> loopback_;
+  std::unique_ptr<Transport> host_;
+  std::thread thread_;
+  std::atomic<bool> stopping_{false};
+};
+
+// ---- a child process
+
+pid_t spawn(const std::vector<std::string>& argv, int stdio_fd, const std::string& log_path) {
+  std::vector<char*> args;
+  for (const std::string& a : argv) args.push_back(const_cast<char*>(a.c_str()));
+  args.push_back(nullptr);
+  const int log = log_path.empty() ? ::open("/dev/null", O_WRONLY) : ::open(log_path.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
+  const pid_t pid = ::fork();
+  if (pid < 0) throw app::Error(std::string("cannot fork: ") + std::strerror(errno));
+  if (pid == 0) {
+    if (stdio_fd >= 0) {
+      ::dup2(stdio_fd, 0);
+      ::dup2(stdio_fd, 1);
+    } else {
+      const int null = ::open("/dev/null", O_RDWR);
+      ::dup2(null, 0);
+      ::dup2(log >= 0 ? log : null, 1);
+    }
+    if (log >= 0) ::dup2(log, 2);
+    for (int fd = 3; fd < 1024; ++fd) ::close(fd);
+    ::execvp(args[0], args.data());
+    std::fprintf(stderr, "cannot run %s: %s\n", args[0], std::strerror(errno));
+    ::_exit(127);
+  }
+  if (log >= 0) ::close(log);
+  return pid;
+}
+
+void kill_and_reap(pid_t& pid) noexcept {
+  if (pid <= 0) return;
+  ::kill(pid, SIGKILL);
+  int status = 0;
+  while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  }
+  pid = -1;
+}
+
+std::string quoted(const std::vector<std::string>& argv) {
+  std::string s;
+  for (const std::string& a : argv) s += (s.empty() ? "" : " ") + a;
+  return s;
+}
+
+class ProcessDut final : public DutDriver {
+ public:
+  ProcessDut(std::string kind, std::vector<std::string> argv, std::string log, std::chrono::milliseconds hang)
+      : kind_(std::move(kind)), argv_(std::move(argv)), log_(std::move(log)), default_hang_(hang) {}
+  ~ProcessDut() override { stop(); }
+  std::string kind() const override { return kind_; }
+  std::chrono::milliseconds default_hang_timeout() const override { return default_hang_; }
+  std::string description() const override { return quoted(argv_); }
+
+  void start() override {
+    stop();
+    int sv[2];
+    if (::socketpair(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0, sv) != 0)
+      throw app::Error(std::string("socketpair: ") + std::strerror(errno));
+    const int child_end = ::fcntl(sv[1], F_DUPFD, 3);  // without CLOEXEC for the child
+    ::close(sv[1]);
+    try {
+      pid_ = spawn(argv_, child_end, log_);
+    } catch (...) {
+      ::close(sv[0]);
+      ::close(child_end);
+      throw;
+    }
+    ::close(child_end);
+    transport_ = std::make_unique<StreamTransport>(sv[0], sv[0], kind_ + " (" + argv_[0] + ")");
+  }
+
+  void stop() noexcept override {
+    kill_and_reap(pid_);
+    transport_.reset();
+  }
+
+  Transport& transport() override { return *transport_; }
+
+ private:
+  std::string kind_;
+  std::vector<std::string> argv_;
+  std::string log_;
+  std::chrono::milliseconds default_hang_;
+  pid_t pid_ = -1;
+  std::unique_ptr<Transport> transport_;
+};
+
+// ---- QEMU
+
+std::string hex(std::uint32_t v) {
+  char b[16];
+  std::snprintf(b, sizeof b, "0x%08x", v);
+  return b;
+}
+
+class QemuDut final : public DutDriver {
+ public:
+  explicit QemuDut(QemuOptions o) : options_(std::move(o)) {
+    const ElfSymbol slot = find_elf_symbol(options_.firmware, "gabarit_table_slot");
+    std::ifstream table(options_.table_path, std::ios::binary | std::ios::ate);
+    if (!table) throw app::Error(options_.table_path + ": cannot open the table");
+    const auto bytes = static_cast<std::uint64_t>(table.tellg());
+    if (bytes > slot.size)
+      throw app::Error(options_.table_path + ": " + std::to_string(bytes) + " bytes; the firmware's table slot holds " +
+                       std::to_string(slot.size));
+    slot_ = slot.address;
+    char dir[] = "/tmp/gabarit-hil-XXXXXX";
+    if (::mkdtemp(dir) == nullptr) throw app::Error(std::string("mkdtemp: ") + std::strerror(errno));
+    dir_ = dir;
+    socket_path_ = dir_ + "/uart0.sock";
+  }
+  ~QemuDut() override {
+    stop();
+    ::rmdir(dir_.c_str());
+  }
+  std::string kind() const override { return "cortex-m"; }
+  std::chrono::milliseconds default_hang_timeout() const override { return std::chrono::milliseconds(60000); }
+  std::chrono::milliseconds stall_interval() const override { return std::chrono::milliseconds(200); }
+  std::string description() const override { return quoted(argv()); }
+
+  std::vector<std::string> argv() const {
+    return {options_.qemu, "-M", options_.machine, "-nographic", "-monitor", "none",
+            "-icount", "shift=" + std::to_string(options_.icount_shift) + ",sleep=off",
+            "-kernel", options_.firmware,
+            "-device", "loader,file=" + options_.table_path + ",addr=" + hex(slot_) + ",force-raw=on",
+            "-chardev", "socket,id=link,path=" + socket_path_, "-serial", "chardev:link"};
+  }
+
+  void start() override {
+    stop();
+    const int listener = ::socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0);
+    if (listener < 0) throw app::Error(std::string("socket: ") + std::strerror(errno));
+    sockaddr_un a{};
+    a.sun_family = AF_UNIX;
+    std::snprintf(a.sun_path, sizeof a.sun_path, "%s", socket_path_.c_str());
+    ::unlink(socket_path_.c_str());
+    if (::bind(listener, reinterpret_cast<sockaddr*>(&a), sizeof a) != 0 || ::listen(listener, 1) != 0) {
+      const int e = errno;
+      ::close(listener);
+      throw app::Error(socket_path_ + ": cannot listen: " + std::strerror(e));
+    }
+    pid_ = spawn(argv(), -1, options_.log_path);
+    // QEMU connects at start-up; it may also fail to start (a bad option).
+    const auto deadline = Clock::now() + std::chrono::seconds(20);
+    int fd = -1;
+    while (fd < 0) {
+      pollfd p{listener, POLLIN, 0};
+      if (::poll(&p, 1, 100) > 0) fd = ::accept4(listener, nullptr, nullptr, SOCK_CLOEXEC);
+      int status = 0;
+      if (fd < 0 && ::waitpid(pid_, &status, WNOHANG) == pid_) {
+        pid_ = -1;
+        ::close(listener);
+        throw app::Error("qemu exited before connecting its UART (see " + options_.log_path + ")");
+      }
+      if (fd < 0 && Clock::now() > deadline) {
+        ::close(listener);
+        kill_and_reap(pid_);
+        throw app::Error("qemu did not connect its UART within 20 s");
+      }
+    }
+    ::close(listener);
+    ::unlink(socket_path_.c_str());
+    transport_ = std::make_unique<StreamTransport>(fd, fd, "cortex-m UART0");
+  }
+
+  void stop() noexcept override {
+    kill_and_reap(pid_);
+    transport_.reset();
+    ::unlink(socket_path_.c_str());
+  }
+
+  Transport& transport() override { return *transport_; }
+
+ private:
+  QemuOptions options_;
+  std::uint32_t slot_ = 0;
+  std::string dir_, socket_path_;
+  pid_t pid_ = -1;
+  std::unique_ptr<Transport> transport_;
+};
+
+template <class T>
+T read_le(const std::vector<unsigned char>& b, std::size_t at) {
+  if (at + sizeof(T) > b.size()) throw app::Error("truncated ELF");
+  T v = 0;
+  for (std::size_t i = 0; i < sizeof(T); ++i) v = static_cast<T>(v | (static_cast<T>(b[at + i]) << (8 * i)));
+  return v;
+}
+
+}  // namespace
+
+ElfSymbol find_elf_symbol(const std::string& elf_path, const std::string& name) {
+  std::ifstream in(elf_path, std::ios::binary);
+  if (!in) throw app::Error(elf_path + ": cannot open the firmware");
+  const std::vector<unsigned char> b((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  try {
+    if (b.size() < 52 || std::memcmp(b.data(), "\x7f" "ELF", 4) != 0 || b[4] != 1 || b[5] != 1)
+      throw app::Error("not a little-endian ELF32 file");
+    const auto shoff = read_le<std::uint32_t>(b, 32);
+    const auto shentsize = read_le<std::uint16_t>(b, 46);
+    const auto shnum = read_le<std::uint16_t>(b, 48);
+    for (std::uint32_t s = 0; s < shnum; ++s) {
+      const std::size_t sh = shoff + std::size_t{s} * shentsize;
+      if (read_le<std::uint32_t>(b, sh + 4) != 2) continue;  // SHT_SYMTAB
+      const auto off = read_le<std::uint32_t>(b, sh + 16), size = read_le<std::uint32_t>(b, sh + 20);
+      const auto link = read_le<std::uint32_t>(b, sh + 24), entsize = read_le<std::uint32_t>(b, sh + 36);
+      const std::size_t strsh = shoff + std::size_t{link} * shentsize;
+      const auto stroff = read_le<std::uint32_t>(b, strsh + 16), strsize = read_le<std::uint32_t>(b, strsh + 20);
+      if (entsize < 16) break;
+      for (std::uint32_t at = 0; at + entsize <= size; at += entsize) {
+        const auto n = read_le<std::uint32_t>(b, off + at);
+        if (n >= strsize || stroff + n >= b.size()) continue;
+        const char* sym = reinterpret_cast<const char*>(b.data() + stroff + n);
+        const std::size_t max = std::min<std::size_t>(strsize - n, b.size() - stroff - n);
+        if (::strnlen(sym, max) == name.size() && name.compare(0, name.size(), sym, name.size()) == 0)
+          return {read_le<std::uint32_t>(b, off + at + 4), read_le<std::uint32_t>(b, off + at + 8)};
+      }
+    }
+  } catch (const app::Error& e) {
+    throw app::Error(elf_path + ": " + e.what());
+  }
+  throw app::Error(elf_path + ": no symbol " + name + " (is this the HIL firmware, gabarit-firmware-hil.elf?)");
+}
+
+std::unique_ptr<DutDriver> make_inprocess_dut(const InprocessOptions& options) { return std::make_unique<InprocessDut>(options); }
+
+std::unique_ptr<DutDriver> make_process_dut(std::string kind, std::vector<std::string> argv, std::string log_path,
+                                            std::chrono::milliseconds hang_timeout) {
+  return std::make_unique<ProcessDut>(std::move(kind), std::move(argv), std::move(log_path), hang_timeout);
+}
+
+std::unique_ptr<DutDriver> make_qemu_dut(const QemuOptions& options) { return std::make_unique<QemuDut>(options); }
+
+}  // namespace gabarit::hil

@@ -1,0 +1,185 @@
+// gabarit hil run
+#include <unistd.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <optional>
+
+#include "commands.hpp"
+#include "gabarit/app/args.hpp"
+#include "gabarit/app/error.hpp"
+#include "gabarit/app/files.hpp"
+#include "gabarit/app/image_io.hpp"
+#include "gabarit/hil/dut.hpp"
+#include "gabarit/hil/harness.hpp"
+#include "gabarit/hil/report.hpp"
+
+namespace gabarit::cli {
+namespace {
+
+std::string beside_this_program(const std::string& name) {
+  std::error_code ec;
+  const auto self = std::filesystem::read_symlink("/proc/self/exe", ec);
+  return ((ec ? std::filesystem::path(".") : self.parent_path()) / name).string();
+}
+
+std::uint32_t count_frames(const std::string& path) {
+  auto frames = app::open_frames(path);
+  app::GrayImage image;
+  std::uint32_t n = 0;
+  while (frames->next(image)) ++n;
+  return n;
+}
+
+// A report folder is written into only if it is new, empty, or a previous
+// run's report (which it replaces file by file): never over other files.
+void prepare_report_dir(const std::string& dir) {
+  namespace fs = std::filesystem;
+  if (!fs::exists(dir)) {
+    fs::create_directories(dir);
+    return;
+  }
+  if (!fs::is_directory(dir)) throw app::Error(dir + ": not a directory (--report wants a folder)");
+  const bool empty = fs::directory_iterator(dir) == fs::directory_iterator();
+  if (!empty && !fs::exists(fs::path(dir) / "summary.json") && !fs::exists(fs::path(dir) / "results.jsonl"))
+    throw app::Error(dir + ": holds files that are not a HIL report; give a new or empty folder");
+  fs::remove(fs::path(dir) / "results.jsonl");
+}
+
+}  // namespace
+
+int hil(const std::vector<std::string>& argv) {
+  if (argv.empty() || (argv[0] != "run" && argv[0] != "--help" && argv[0] != "-h"))
+    throw app::UsageError("hil: want 'run' (gabarit hil run --help)");
+  const std::vector<std::string> rest(argv.begin() + (argv[0] == "run" ? 1 : 0), argv.end());
+  app::Args args(
+      "hil run",
+      "--dut inprocess|verilator|cortex-m --sequence DIR --report DIR [--table T] [--init X,Y[,THETA[,DEPTH]]] [--rate FPS]\n"
+      "       [--faults FILE|random:P] [--frames N] [--seed S]",
+      "Replays a recorded sequence (DIR/frames.y4m, DIR/gt.csv if any) into a device under test over the HIL link\n"
+      "(docs/hil-protocol.md), collects every pose, accounts for every frame (a pose, or why not), checks each pose\n"
+      "bit for bit against the host's own tracking of the same frames with the same table, injects faults on the\n"
+      "host side of the link, and writes a report: frames.csv, poses.csv, results.jsonl, summary.json, junit.xml,\n"
+      "faults.csv (the plan, to replay), report.md with SVG plots. Exit status 0 when every check passes, 1 otherwise.\n"
+      "DUTs: inprocess (the kernel's TrackingSession on a thread, loopback or UDP link), verilator (the hardware\n"
+      "voter, Verilated, in gabarit-hil-verilator: the thesis's loop with the voter in RTL), cortex-m (the HIL\n"
+      "firmware in qemu-system-arm, the table loaded into its flash slot, its UART0 on a socket).",
+      {{"--dut", "KIND", "inprocess, verilator or cortex-m", false, true},
+       {"--sequence", "DIR", "folder with frames.y4m and, optionally, gt.csv (gabarit synth writes both)", false, true},
+       {"--report", "DIR", "folder for the report (new, empty, or a previous report)", false, true},
+       {"--table", "T", "the table (default DIR/table.gbt); the DUT must hold the same (HELLO carries its CRC)"},
+       {"--init", "X,Y[,THETA[,DEPTH]]", "the pose before the first frame (default: gt.csv's first row)"},
+       {"--rate", "FPS", "send frames at this rate, dropping those the DUT is too busy for (default: as fast as it takes them)"},
+       {"--faults", "FILE|random:P", "faults to inject: a plan file (FRAME KIND per line; see faults.csv of a run) or\n"
+                                     "                          a fraction P of the frames, kinds drawn at random"},
+       {"--frames", "N", "the first N frames only"},
+       {"--seed", "S", "the random fault plan's and each fault's bytes and bits (default 1)"},
+       {"--plain", "", "inprocess: the thesis's loop instead of the session defaults"},
+       {"--link", "loopback|udp", "inprocess: the link (default loopback; udp: two sockets on 127.0.0.1)"},
+       {"--slots", "N", "inprocess: frames the DUT queues, 1..8 (default 4)"},
+       {"--firmware", "ELF", "cortex-m: the HIL firmware (build/cortex-m7/platform/cortex-m/gabarit-firmware-hil.elf)"},
+       {"--machine", "NAME", "cortex-m: the QEMU board, mps2-an500 (default) or mps3-an547"},
+       {"--icount", "N", "cortex-m: QEMU -icount shift=N (default 0: one guest instruction per ns)"},
+       {"--verilator-dut", "PATH", "verilator: the DUT program (default: gabarit-hil-verilator beside gabarit)"},
+       {"--clock-mhz", "F", "verilator: the voter's clock for times (default 48: the UP5K's lowest Fmax over seeds)"},
+       {"--timeout", "MS", "declare the DUT hung after this long without an answer to a PING (default per DUT)"}});
+  if (!args.parse(rest)) return 0;
+  const std::string kind = args.get("--dut");
+  const std::string sequence = args.get("--sequence");
+  const std::string report = args.get("--report");
+  const std::string table = args.get_or("--table", (std::filesystem::path(sequence) / "table.gbt").string());
+  if (!std::filesystem::exists(table)) throw app::UsageError("no table: " + table + " does not exist (give --table)");
+  const std::string frames_path = (std::filesystem::path(sequence) / "frames.y4m").string();
+  if (!std::filesystem::exists(frames_path)) throw app::UsageError(sequence + ": no frames.y4m");
+  const auto dut_only = [&](const char* option, const char* dut) {
+    if (args.has(option) && kind != dut) throw app::UsageError(std::string(option) + " applies to --dut " + dut);
+  };
+  dut_only("--plain", "inprocess");
+  dut_only("--link", "inprocess");
+  dut_only("--slots", "inprocess");
+  dut_only("--firmware", "cortex-m");
+  dut_only("--machine", "cortex-m");
+  dut_only("--icount", "cortex-m");
+  dut_only("--verilator-dut", "verilator");
+  dut_only("--clock-mhz", "verilator");
+
+  hil::RunConfig config;
+  config.sequence_dir = sequence;
+  config.table_path = table;
+  if (args.has("--init")) {
+    const app::TableFile t(table);
+    config.init = app::parse_init_pose(args.get("--init"), t.view(), "--init");
+  }
+  config.rate_fps = args.number("--rate", 0, 0.001, 100000);
+  config.seed = static_cast<std::uint64_t>(args.integer("--seed", 1, 0, INT64_MAX));
+  const std::uint32_t available = count_frames(frames_path);
+  config.max_frames = static_cast<std::uint32_t>(args.integer("--frames", available, 1, 0xFFFFFFFEll));
+  if (config.max_frames > available) config.max_frames = available;
+  if (config.max_frames == 0) throw app::Error(frames_path + ": no frames");
+  if (args.has("--faults")) config.faults = hil::parse_fault_plan(args.get("--faults"), config.max_frames, config.seed);
+
+  std::unique_ptr<hil::DutDriver> dut;
+  const std::chrono::milliseconds timeout(args.integer("--timeout", 0, 1, 3600000));
+  if (kind == "inprocess") {
+    hil::InprocessOptions o;
+    o.table_path = table;
+    o.plain = args.has("--plain");
+    o.frame_slots = static_cast<std::uint32_t>(args.integer("--slots", 4, 1, 8));
+    const std::string link = args.get_or("--link", "loopback");
+    if (link != "loopback" && link != "udp") throw app::UsageError("--link '" + link + "': want loopback or udp");
+    o.udp = link == "udp";
+    dut = hil::make_inprocess_dut(o);
+  } else if (kind == "verilator") {
+    const std::string program = args.get_or("--verilator-dut", beside_this_program("gabarit-hil-verilator"));
+    if (::access(program.c_str(), X_OK) != 0)
+      throw app::Error(program + ": not found (built with Verilator installed; or give --verilator-dut)");
+    const double mhz = args.number("--clock-mhz", 48, 0.001, 10000);
+    dut = hil::make_process_dut("verilator", {program, "--table", table, "--clock-hz", std::to_string(static_cast<long>(mhz * 1e6))},
+                                (std::filesystem::path(report) / "dut.log").string(),
+                                timeout.count() ? timeout : std::chrono::milliseconds(20000));
+  } else if (kind == "cortex-m") {
+    if (!args.has("--firmware")) throw app::UsageError("--dut cortex-m needs --firmware ELF (gabarit-firmware-hil.elf)");
+    hil::QemuOptions o;
+    o.firmware = args.get("--firmware");
+    o.machine = args.get_or("--machine", "mps2-an500");
+    if (o.machine != "mps2-an500" && o.machine != "mps3-an547") throw app::UsageError("--machine: want mps2-an500 or mps3-an547");
+    o.icount_shift = static_cast<int>(args.integer("--icount", 0, 0, 10));
+    o.table_path = table;
+    o.log_path = (std::filesystem::path(report) / "dut.log").string();
+    dut = hil::make_qemu_dut(o);
+  } else {
+    throw app::UsageError("--dut '" + kind + "': want inprocess, verilator or cortex-m");
+  }
+  if (timeout.count() != 0 && kind != "verilator") dut->set_hang_timeout(timeout);
+
+  prepare_report_dir(report);
+  app::OutputFile jsonl((std::filesystem::path(report) / "results.jsonl").string());
+  std::FILE* stream = jsonl.stream();
+  config.on_resolved = [&](const hil::FrameRecord& r) {
+    std::fputs((hil::frame_json(r) + "\n").c_str(), stream);
+    std::fflush(stream);
+  };
+  const bool tty = ::isatty(2) != 0;
+  config.progress = [&](std::uint32_t done, std::uint32_t total) {
+    std::fprintf(stderr, tty ? "\rhil: %u/%u frames answered" : "hil: %u/%u frames answered\n", done, total);
+    if (tty && done == total) std::fputc('\n', stderr);
+  };
+  std::vector<host::PoseSample> truth;
+  if (const auto gt = std::filesystem::path(sequence) / "gt.csv"; std::filesystem::exists(gt)) truth = host::read_pose_csv(gt.string());
+  const hil::RunResult result = hil::run_hil(config, *dut);
+  jsonl.commit();
+  hil::write_report(report, config, result, truth);
+  std::size_t failed = 0;
+  for (const hil::Check& c : hil::run_checks(result)) {
+    if (c.passed) continue;
+    if (failed++ < 10) std::fprintf(stderr, "hil: FAIL %s: %s\n", c.name.c_str(), c.message.c_str());
+  }
+  std::size_t poses = 0;
+  for (const auto& r : result.frames) poses += r.pose.has_value();
+  std::fprintf(stderr, "hil: %s: %u frames, %zu poses, %zu faults injected, %zu checks failed; report in %s\n", result.caps.kind,
+               result.frames_total, poses, result.faults.size(), failed, report.c_str());
+  if (!result.error.empty()) std::fprintf(stderr, "hil: the run stopped: %s\n", result.error.c_str());
+  return failed == 0 ? 0 : 1;
+}
+
+}  // namespace gabarit::cli
