@@ -361,9 +361,13 @@ void Run::handshake(const Pose& initial, std::uint32_t first_frame) {
     throw RunAborted{std::string("the DUT did not start: ") + e.what()};
   }
   if (awaiting_caps_) throw RunAborted{"the DUT did not answer HELLO within " + std::to_string(dut_.hang_timeout().count()) + " ms"};
+  if (caps_.refusal == link::Refusal::kTableMismatch)
+    throw RunAborted{"the DUT holds another table: CRC-32 " + std::to_string(caps_.table_crc) + " (" + std::to_string(caps_.table_bytes) +
+                     " bytes), the host's " + std::to_string(table_crc_) + " (" + std::to_string(table_.bytes().size()) + " bytes)"};
+  if (caps_.refusal == link::Refusal::kNoTable)
+    throw RunAborted{"the DUT has no valid table it can use (too large for it, or none loaded; see its log)"};
   if (caps_.refusal != link::Refusal::kNone)
-    throw RunAborted{std::string("the DUT refused the run: ") + link::refusal_name(caps_.refusal) + " (host table CRC-32 " +
-                     std::to_string(table_crc_) + ", DUT's " + std::to_string(caps_.table_crc) + ")"};
+    throw RunAborted{std::string("the DUT refused the run: ") + link::refusal_name(caps_.refusal)};
   if (run_id_ == 1) {
     result_.caps = caps_;
     reference_.emplace(table_.view(), caps_.mode);

@@ -1,10 +1,17 @@
-// Drives a Verilated gbt_voter (any lane count) and compares it with the C++
-// kernel (the golden model): every counter, best cell, runner-up, vote and
-// feature counts, bit for bit.
+// Drives a Verilated gbt_voter (any lane count and capacities) and compares
+// it with the C++ kernel (the golden model): every counter, best cell,
+// runner-up, vote and feature counts, bit for bit. Shared by the
+// co-simulation tests (tests/hdl) and the HIL harness's Verilator DUT
+// (hil/duts/verilator_dut.cpp).
 #pragma once
 
 #include <verilated.h>
+#if VM_TRACE
 #include <verilated_fst_c.h>
+#endif
+#if VM_COVERAGE
+#include <verilated_cov.h>
+#endif
 
 #include <unistd.h>
 
@@ -13,6 +20,7 @@
 #include <cstdlib>
 #include <memory>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -24,7 +32,7 @@
 
 namespace gabarit::hdl {
 
-// Capacities the models are verilated with (tests/hdl/CMakeLists.txt).
+// Capacities the co-simulation models are verilated with (tests/hdl/CMakeLists.txt).
 inline constexpr std::uint32_t kCellCapacity = 512;
 inline constexpr std::uint32_t kPixelCapacity = 4096;
 inline constexpr std::uint32_t kRefsPerLane = 65536;
@@ -109,14 +117,20 @@ inline std::string compare(const Outcome& hw, const Outcome& sw) {
 template <class Model>
 class Harness {
  public:
-  explicit Harness(const std::string& trace_path = {}) : context_(std::make_unique<VerilatedContext>()) {
+  explicit Harness(const std::string& trace_path = {}, std::uint32_t cell_capacity = kCellCapacity,
+                   std::uint32_t refs_per_lane = kRefsPerLane)
+      : context_(std::make_unique<VerilatedContext>()), cell_capacity_(cell_capacity), refs_per_lane_(refs_per_lane) {
     context_->traceEverOn(!trace_path.empty());
     model_ = std::make_unique<Model>(context_.get());
+#if VM_TRACE
     if (!trace_path.empty()) {
       trace_ = std::make_unique<VerilatedFstC>();
       model_->trace(trace_.get(), 99);
       trace_->open(trace_path.c_str());
     }
+#else
+    if (!trace_path.empty()) throw std::runtime_error("this model was verilated without tracing");
+#endif
     model_->rst_ni = 0;
     model_->clk_i = 0;
     model_->eval();
@@ -125,8 +139,11 @@ class Harness {
     tick();
   }
   ~Harness() {
+#if VM_TRACE
     if (trace_) trace_->close();
+#endif
     model_->final();
+#if VM_COVERAGE
     // Line/toggle coverage (models are verilated with COVERAGE): one file per
     // harness in $VERILATOR_COVERAGE_DIR, merged by the hdl-coverage target.
     if (const char* dir = std::getenv("VERILATOR_COVERAGE_DIR"); dir && *dir) {
@@ -135,6 +152,7 @@ class Harness {
                                std::to_string(serial++) + ".dat";
       context_->coveragep()->write(path.c_str());
     }
+#endif
   }
   Model& model() { return *model_; }
   std::uint64_t cycle() const { return cycle_; }
@@ -142,17 +160,17 @@ class Harness {
   void tick() {
     model_->clk_i = 0;
     model_->eval();
-    if (trace_) trace_->dump(context_->time());
+    dump();
     context_->timeInc(1);
     model_->clk_i = 1;
     model_->eval();
-    if (trace_) trace_->dump(context_->time());
+    dump();
     context_->timeInc(1);
     ++cycle_;
   }
 
   void load(const host::HdlLayout& l, std::uint32_t lanes) {
-    const host::HdlWidths w = host::hdl_widths(lanes, kCellCapacity, kRefsPerLane);
+    const host::HdlWidths w = host::hdl_widths(lanes, cell_capacity_, refs_per_lane_);
     Model& m = *model_;
     m.cell_count_i = l.cell_count;
     m.roi_width_i = l.roi_width;
@@ -243,8 +261,16 @@ class Harness {
   }
 
   std::unique_ptr<VerilatedContext> context_;
+  std::uint32_t cell_capacity_, refs_per_lane_;
   std::unique_ptr<Model> model_;
+#if VM_TRACE
+  void dump() {
+    if (trace_) trace_->dump(context_->time());
+  }
   std::unique_ptr<VerilatedFstC> trace_;
+#else
+  void dump() {}
+#endif
   std::uint64_t cycle_ = 0;
 };
 
