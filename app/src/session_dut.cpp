@@ -28,16 +28,16 @@ bool SessionDut::track_next(link::DutEndpoint& endpoint) noexcept {
   link::ReadyFrame frame;
   if (!endpoint.next_frame(frame)) return false;
   if (!session_) {
-    endpoint.report_failure(link::EventKind::kSkipped, link::EventReason::kNotStarted, 0);
+    endpoint.report_failure(link::EventKind::kSkipped, link::EventReason::kNotStarted, 0, now());
     return true;
   }
   const ImageView image{frame.pixels.data(), frame.width, frame.height, frame.width};
   SessionResult result;
   if (const Status s = session_->step(image, buffers_.scratch(), result); s != Status::kOk) {
-    endpoint.report_failure(link::EventKind::kError, link::EventReason::kTracking, static_cast<std::uint32_t>(s));
+    endpoint.report_failure(link::EventKind::kError, link::EventReason::kTracking, static_cast<std::uint32_t>(s), now());
     return true;
   }
-  endpoint.report_pose(link::session_report(result));
+  endpoint.report_pose(link::session_report(result), now());
   return true;
 }
 

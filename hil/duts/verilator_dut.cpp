@@ -42,9 +42,9 @@ constexpr std::uint32_t kCells = GABARIT_HIL_CELLS;
 constexpr std::uint32_t kPixels = GABARIT_HIL_PIXELS;
 constexpr std::uint32_t kRefsPerLane = GABARIT_HIL_REFS_PER_LANE;
 
-class StdoutOutput final : public link::MessageOutput {
+class StdoutOutput {
  public:
-  void send(std::span<const std::byte> message) noexcept override {
+  void send(std::span<const std::byte> message) noexcept {
     std::byte wire[link::cobs_encoded_capacity(link::message_bytes(link::kMinPayload))];
     std::size_t n = 0;
     if (link::cobs_encode(message, wire, n) != Status::kOk) return;
@@ -59,7 +59,7 @@ class StdoutOutput final : public link::MessageOutput {
   }
 };
 
-class VoterDut final : public link::DutApplication {
+class VoterDut {
  public:
   VoterDut(const TableView& table, bool fits)
       : table_(table), fits_(fits), buffers_(table, app::VoterChoice::kCsr), voter_({}, kCells, kRefsPerLane) {
@@ -69,14 +69,14 @@ class VoterDut final : public link::DutApplication {
     voter_.model().roi_height_i = table.roi_height();
   }
 
-  link::Refusal start(const link::Hello& hello) noexcept override {
+  link::Refusal start(const link::Hello& hello) noexcept {
     if (!fits_) return link::Refusal::kNoTable;
     if (!pose_in_range(hello.initial) || hello.initial.depth >= table_.depth_count()) return link::Refusal::kBadPose;
     pose_ = hello.initial;
     grader_.reset(MotionFilterParams{}, hello.initial);  // grades confidence as the plain session does
     return link::Refusal::kNone;
   }
-  std::uint64_t now() noexcept override { return voter_.cycle(); }
+  std::uint64_t now() noexcept { return voter_.cycle(); }
 
   bool track_next(link::DutEndpoint& endpoint) {
     link::ReadyFrame frame;
@@ -85,7 +85,7 @@ class VoterDut final : public link::DutApplication {
     TrackerScratch scratch = buffers_.scratch();
     PreparedFrame prepared;
     if (const Status s = prepare_frame(table_, detector_of(table_), image, pose_, scratch, prepared); s != Status::kOk) {
-      endpoint.report_failure(link::EventKind::kError, link::EventReason::kTracking, static_cast<std::uint32_t>(s));
+      endpoint.report_failure(link::EventKind::kError, link::EventReason::kTracking, static_cast<std::uint32_t>(s), now());
       return true;
     }
     const std::vector<RoiPoint> features(scratch.features.begin(), scratch.features.begin() + prepared.features);
@@ -94,21 +94,21 @@ class VoterDut final : public link::DutApplication {
       hw = voter_.frame(features, table_.cell_count(), 0.0, rng_);
     } catch (const std::exception& e) {
       std::fprintf(stderr, "frame %u: the voter stalled: %s\n", frame.frame_id, e.what());
-      endpoint.report_failure(link::EventKind::kError, link::EventReason::kHardware, 0);
+      endpoint.report_failure(link::EventKind::kError, link::EventReason::kHardware, 0, now());
       return true;
     }
     std::copy(hw.counters.begin(), hw.counters.end(), scratch.counters.begin());
     const VoteTally tally{hw.features, hw.votes};
     StepResult step;
     if (const Status s = finish_frame(table_, pose_, prepared, scratch.counters, tally, step); s != Status::kOk) {
-      endpoint.report_failure(link::EventKind::kError, link::EventReason::kTracking, static_cast<std::uint32_t>(s));
+      endpoint.report_failure(link::EventKind::kError, link::EventReason::kTracking, static_cast<std::uint32_t>(s), now());
       return true;
     }
     // The voter's own ranking against the kernel's ranking of its counters.
     const bool runner_agrees = step.runner_up.cell == hw.runner_cell && (hw.runner_cell == kNoCell || step.runner_up.votes == hw.runner_votes);
     if (hw.overflow || hw.roi_error || step.best.cell != hw.best_cell || step.best.votes != hw.best_votes || !runner_agrees) {
       std::fprintf(stderr, "frame %u: the voter's result disagrees with the kernel's ranking of its counters\n", frame.frame_id);
-      endpoint.report_failure(link::EventKind::kError, link::EventReason::kHardware, hw.best_cell);
+      endpoint.report_failure(link::EventKind::kError, link::EventReason::kHardware, hw.best_cell, now());
       return true;
     }
     // The plain loop: a lost frame keeps the previous pose (TrackingSession with kPlainSession).
@@ -123,7 +123,7 @@ class VoterDut final : public link::DutApplication {
     report.features_dropped = step.features_dropped;
     report.votes = step.votes;
     report.cycles = hw.cycles;
-    endpoint.report_pose(report);
+    endpoint.report_pose(report, now());
     return true;
   }
 
@@ -186,7 +186,7 @@ int run(int argc, char** argv) {
   caps.device_id = crc32(std::as_bytes(std::span(board, std::strlen(board))));
   std::vector<std::uint8_t> memory(link::dut_frame_memory_bytes(caps.frame_slots, caps.max_frame_bytes));
   StdoutOutput out;
-  link::DutEndpoint endpoint(caps, memory, app, out);
+  link::DutEndpoint endpoint(caps, memory);
   std::vector<std::byte> buffer(link::message_bytes(link::kMaxPayload));
   link::CobsStreamDecoder decoder(buffer);
   std::vector<std::byte> chunk(65536);
@@ -199,13 +199,12 @@ int run(int argc, char** argv) {
     }
     for (ssize_t i = 0; i < r; ++i) {
       switch (decoder.push(chunk[static_cast<std::size_t>(i)])) {
-        case link::CobsStreamDecoder::Event::kMessage: endpoint.on_message(decoder.message()); break;
+        case link::CobsStreamDecoder::Event::kMessage: link::deliver(endpoint, decoder.message(), app, out); break;
         case link::CobsStreamDecoder::Event::kDiscarded: endpoint.on_framing_error(); break;
         case link::CobsStreamDecoder::Event::kNone: break;
       }
       // Track as soon as a frame is whole: the next bytes wait in the socket.
-      while (app.track_next(endpoint)) {
-      }
+      while (app.track_next(endpoint)) link::flush(endpoint, out);
     }
   }
   return 0;

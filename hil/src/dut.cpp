@@ -29,10 +29,10 @@ std::uint64_t steady_micros() {
 
 // ---- in-process
 
-class LoopbackOutput final : public link::MessageOutput {
+class LoopbackOutput {
  public:
   explicit LoopbackOutput(Transport& end) : end_(end) {}
-  void send(std::span<const std::byte> message) noexcept override {
+  void send(std::span<const std::byte> message) noexcept {
     try {
       end_.send(message, Clock::now() + std::chrono::seconds(1));
     } catch (const std::exception&) {
@@ -103,17 +103,20 @@ class InprocessDut final : public DutDriver {
       caps.device_id = crc32(std::as_bytes(std::span("inprocess/host thread")));
       std::vector<std::uint8_t> memory(link::dut_frame_memory_bytes(caps.frame_slots, caps.max_frame_bytes));
       LoopbackOutput out(end);
-      link::DutEndpoint endpoint(caps, memory, app, out);
+      link::DutEndpoint endpoint(caps, memory);
       while (!out.closed && !stopping_) {
         // Drain what has arrived, then track one frame; wait only when idle.
         bool idle = true;
         while (auto m = end.receive(Clock::now())) {
-          endpoint.on_message(*m);
+          link::deliver(endpoint, *m, app, out);
           idle = false;
         }
-        if (app.track_next(endpoint)) continue;
+        if (app.track_next(endpoint)) {
+          link::flush(endpoint, out);
+          continue;
+        }
         if (idle) {
-          if (auto m = end.receive(Clock::now() + std::chrono::milliseconds(50))) endpoint.on_message(*m);
+          if (auto m = end.receive(Clock::now() + std::chrono::milliseconds(50))) link::deliver(endpoint, *m, app, out);
         }
       }
     } catch (const std::exception&) {

@@ -213,24 +213,24 @@ TEST(Protocol, EveryMessageRoundTripsAndEachDecodeErrorHasItsCode) {
 }
 
 // A DUT endpoint with a recording output and an application that accepts.
-struct Recorder : MessageOutput {
-  void send(std::span<const std::byte> m) noexcept override { sent.emplace_back(m.begin(), m.end()); }
+struct Recorder {
+  void send(std::span<const std::byte> m) noexcept { sent.emplace_back(m.begin(), m.end()); }
   std::vector<std::vector<std::byte>> sent;
 };
-struct App : DutApplication {
-  Refusal start(const Hello& h) noexcept override {
+struct App {
+  Refusal start(const Hello& h) noexcept {
     started = h;
     ++starts;
     return Refusal::kNone;
   }
-  std::uint64_t now() noexcept override { return ++clock; }
+  std::uint64_t now() noexcept { return ++clock; }
   Hello started;
   int starts = 0;
   std::uint64_t clock = 0;
 };
 
 struct EndpointFixture : ::testing::Test {
-  EndpointFixture() : memory(2 * 64), endpoint(caps(), memory, app, out) {}
+  EndpointFixture() : memory(2 * 64), endpoint(caps(), memory) {}
   static Caps caps() {
     Caps c;
     c.max_payload = 256;
@@ -240,7 +240,8 @@ struct EndpointFixture : ::testing::Test {
     c.max_frame_bytes = 64;
     return c;
   }
-  void deliver(MessageType type, std::span<const std::byte> payload) { endpoint.on_message(message(type, payload, seq++)); }
+  void deliver(MessageType type, std::span<const std::byte> payload) { link::deliver(endpoint, message(type, payload, seq++), app, out); }
+  void flush() { link::flush(endpoint, out); }
   void hello(std::uint32_t run, std::uint32_t table_crc = 0x1234) {
     std::byte b[kHelloBytes];
     deliver(MessageType::kHello, std::span(b, encode(Hello{1, 256, table_crc, run, {}, 0}, b)));
@@ -314,11 +315,13 @@ TEST_F(EndpointFixture, FragmentsAssembleInOrderAndEachFrameGetsOneAnswer) {
   EXPECT_EQ(f.frame_id, 0u);
   EXPECT_EQ(f.pixels[63], 63);
   EXPECT_FALSE(endpoint.next_frame(f)) << "one frame out at a time";
-  endpoint.report_pose(PoseReport{});
+  endpoint.report_pose(PoseReport{}, app.now());
+  flush();
   ASSERT_TRUE(endpoint.next_frame(f));
   EXPECT_EQ(f.frame_id, 1u);
   EXPECT_EQ(f.pixels[0], 1);
-  endpoint.report_failure(EventKind::kError, EventReason::kTracking, 3);
+  endpoint.report_failure(EventKind::kError, EventReason::kTracking, 3, app.now());
+  flush();
   std::vector<Event> events;
   std::vector<PoseReport> poses;
   take(&events, &poses);
@@ -371,14 +374,14 @@ TEST_F(EndpointFixture, GarbageIsCountedNeverTrusted) {
   take();
   auto m = message(MessageType::kPing, {}, seq++);
   m[5] ^= std::byte{1};
-  endpoint.on_message(m);
-  endpoint.on_message(std::vector<std::byte>(3));
+  link::deliver(endpoint, m, app, out);
+  link::deliver(endpoint, std::vector<std::byte>(3), app, out);
   Header h;
   h.type = static_cast<MessageType>(77);
   std::vector<std::byte> unknown(message_bytes(0));
   std::size_t w;
   ASSERT_EQ(encode_message(h, {}, unknown, w), Status::kOk);
-  endpoint.on_message(unknown);
+  link::deliver(endpoint, unknown, app, out);
   seq = 10;  // a gap of messages
   deliver(MessageType::kStats, {});
   Stats s;

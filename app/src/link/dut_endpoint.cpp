@@ -7,8 +7,8 @@
 
 namespace gabarit::link {
 
-DutEndpoint::DutEndpoint(const Caps& caps, std::span<std::uint8_t> frame_memory, DutApplication& app, MessageOutput& out) noexcept
-    : caps_(caps), memory_(frame_memory), app_(app), out_(out) {
+DutEndpoint::DutEndpoint(const Caps& caps, std::span<std::uint8_t> frame_memory) noexcept
+    : caps_(caps), memory_(frame_memory) {
   GABARIT_ASSERT(caps.frame_slots >= 1 && caps.frame_slots <= kMaxFrameSlots);
   GABARIT_ASSERT(frame_memory.size() >= dut_frame_memory_bytes(caps.frame_slots, caps.max_frame_bytes));
   if (caps_.frame_slots > kMaxFrameSlots) caps_.frame_slots = kMaxFrameSlots;
@@ -47,15 +47,33 @@ void DutEndpoint::send(MessageType type, std::span<const std::byte> payload) noe
   h.seq = seq_++;
   h.ack = peer_seq_;
   h.credits = credits();
+  GABARIT_ASSERT(outbox_count_ < kOutboxMessages);
+  if (outbox_count_ == kOutboxMessages) {  // the caller did not flush: never overwrite
+    ++stats_.bad_message;
+    return;
+  }
+  const std::uint32_t slot = (outbox_head_ + outbox_count_) % kOutboxMessages;
   std::size_t written = 0;
-  if (encode_message(h, payload, tx_, written) != Status::kOk) return;  // payloads here are all < kMinPayload
+  if (encode_message(h, payload, outbox_[slot], written) != Status::kOk) return;  // payloads here are all < kMinPayload
+  outbox_size_[slot] = static_cast<std::uint16_t>(written);
+  ++outbox_count_;
   ++stats_.messages_out;
-  out_.send(std::span<const std::byte>(tx_, written));
+}
+
+std::span<const std::byte> DutEndpoint::front_outgoing() const noexcept {
+  if (outbox_count_ == 0) return {};
+  return {outbox_[outbox_head_], outbox_size_[outbox_head_]};
+}
+
+void DutEndpoint::pop_outgoing() noexcept {
+  if (outbox_count_ == 0) return;
+  outbox_head_ = (outbox_head_ + 1) % kOutboxMessages;
+  --outbox_count_;
 }
 
 void DutEndpoint::send_event(EventKind kind, EventReason reason, std::uint32_t frame_id, std::uint32_t detail) noexcept {
   std::byte payload[kEventBytes];
-  const Event e{kind, reason, frame_id, detail, app_.now()};
+  const Event e{kind, reason, frame_id, detail, now_};
   send(MessageType::kEvent, std::span<const std::byte>(payload, encode(e, payload)));
 }
 
@@ -85,7 +103,8 @@ void DutEndpoint::drop_filling(EventReason reason) noexcept {
   ++stats_.frames_dropped;
 }
 
-void DutEndpoint::on_message(std::span<const std::byte> message) noexcept {
+void DutEndpoint::on_message(std::span<const std::byte> message, std::uint64_t now) noexcept {
+  now_ = now;
   Header h;
   std::span<const std::byte> payload;
   if (const Status s = decode_message(message, h, payload); s != Status::kOk) {
@@ -112,7 +131,7 @@ void DutEndpoint::on_message(std::span<const std::byte> message) noexcept {
       // The host pings only between frames: a frame still being assembled
       // can no longer complete, and is answered before the PONG.
       drop_filling(EventReason::kIncomplete);
-      const Pong pong{ping.token, ping.host_time_us, app_.now(), newest_, queued(), oldest_queued()};
+      const Pong pong{ping.token, ping.host_time_us, now_, newest_, queued(), oldest_queued()};
       std::byte out[kPongBytes];
       send(MessageType::kPong, std::span<const std::byte>(out, encode(pong, out)));
       return;
@@ -145,24 +164,28 @@ void DutEndpoint::on_hello(std::span<const std::byte> payload) noexcept {
     ++stats_.bad_message;
     return;
   }
-  if (!(running_ && hello.run_id == caps_.run_id)) {  // a repeated HELLO only gets CAPS again
-    for (Slot& s : slots_) s = Slot{};
-    filling_ = out_slot_ = kMaxFrameSlots;
-    newest_ = last_refused_ = kNoFrame;
-    seen_mask_ = 0;
-    bye_ = false;
-    Refusal refusal = Refusal::kNone;
-    if (hello.version != kVersion) {
-      refusal = Refusal::kProtocolVersion;
-    } else if (hello.table_crc != 0 && hello.table_crc != caps_.table_crc) {
-      refusal = Refusal::kTableMismatch;
-    } else {
-      refusal = app_.start(hello);
-    }
-    caps_.run_id = hello.run_id;
-    caps_.refusal = refusal;
-    running_ = refusal == Refusal::kNone;
+  if (running_ && hello.run_id == caps_.run_id) {  // a repeated HELLO only gets CAPS again
+    std::byte out[kCapsBytes];
+    send(MessageType::kCaps, std::span<const std::byte>(out, encode(caps_, out)));
+    return;
   }
+  for (Slot& s : slots_) s = Slot{};
+  filling_ = out_slot_ = kMaxFrameSlots;
+  newest_ = last_refused_ = kNoFrame;
+  seen_mask_ = 0;
+  bye_ = false;
+  running_ = false;
+  caps_.run_id = hello.run_id;
+  if (hello.version != kVersion) return answer_hello(Refusal::kProtocolVersion);
+  if (hello.table_crc != 0 && hello.table_crc != caps_.table_crc) return answer_hello(Refusal::kTableMismatch);
+  hello_ = hello;
+  hello_pending_ = true;  // the application's to accept: answer_hello
+}
+
+void DutEndpoint::answer_hello(Refusal refusal) noexcept {
+  hello_pending_ = false;
+  caps_.refusal = refusal;
+  running_ = refusal == Refusal::kNone;
   std::byte out[kCapsBytes];
   send(MessageType::kCaps, std::span<const std::byte>(out, encode(caps_, out)));
 }
@@ -226,7 +249,7 @@ void DutEndpoint::on_frame(std::span<const std::byte> payload) noexcept {
   if (s.filled == std::uint32_t{s.width} * s.height) {
     const auto pixels = slot_pixels(filling_).first(s.filled);
     s.crc = crc32c(std::as_bytes(pixels));
-    s.received = app_.now();
+    s.received = now_;
     s.order = next_order_++;
     s.state = SlotState::kReady;
     filling_ = kMaxFrameSlots;
@@ -250,14 +273,15 @@ bool DutEndpoint::next_frame(ReadyFrame& frame) noexcept {
   return true;
 }
 
-void DutEndpoint::report_pose(PoseReport pose) noexcept {
+void DutEndpoint::report_pose(PoseReport pose, std::uint64_t now) noexcept {
+  now_ = now;
   GABARIT_ASSERT(out_slot_ < kMaxFrameSlots);
   if (out_slot_ >= kMaxFrameSlots) return;
   Slot& s = slots_[out_slot_];
   pose.frame_id = s.frame_id;
   pose.frame_crc = s.crc;
   pose.received = s.received;
-  pose.done = app_.now();
+  pose.done = now;
   s.state = SlotState::kFree;
   out_slot_ = kMaxFrameSlots;
   ++stats_.frames_tracked;
@@ -265,7 +289,8 @@ void DutEndpoint::report_pose(PoseReport pose) noexcept {
   send(MessageType::kPose, std::span<const std::byte>(out, encode(pose, out)));
 }
 
-void DutEndpoint::report_failure(EventKind kind, EventReason reason, std::uint32_t detail) noexcept {
+void DutEndpoint::report_failure(EventKind kind, EventReason reason, std::uint32_t detail, std::uint64_t now) noexcept {
+  now_ = now;
   GABARIT_ASSERT(out_slot_ < kMaxFrameSlots);
   if (out_slot_ >= kMaxFrameSlots) return;
   Slot& s = slots_[out_slot_];

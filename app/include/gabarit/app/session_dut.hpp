@@ -15,7 +15,8 @@
 
 namespace gabarit::app {
 
-class SessionDut final : public link::DutApplication {
+// An Application for link::deliver (dut_endpoint.hpp).
+class SessionDut {
  public:
   // `plain`: the thesis's loop; else gabarit track's defaults (the session,
   // the recovery search detecting once per frame, the table's focus stack).
@@ -23,9 +24,10 @@ class SessionDut final : public link::DutApplication {
   SessionDut(const TableView& table, bool plain, std::uint64_t (*clock)());
   // The mode bits CAPS reports for it (link::kMode*).
   std::uint32_t mode() const;
-  link::Refusal start(const link::Hello& hello) noexcept override;
-  std::uint64_t now() noexcept override { return clock_(); }
-  // Tracks the endpoint's next frame, if one is ready, and reports it.
+  link::Refusal start(const link::Hello& hello) noexcept;
+  std::uint64_t now() noexcept { return clock_(); }
+  // Tracks the endpoint's next frame, if one is ready, and reports it (the
+  // caller then flushes the endpoint's outbox).
   bool track_next(link::DutEndpoint& endpoint) noexcept;
 
  private:

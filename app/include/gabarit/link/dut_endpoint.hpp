@@ -21,27 +21,18 @@
 
 namespace gabarit::link {
 
-// Where the endpoint's messages go: a stream transport COBS-encodes them, a
-// message transport sends each as one transfer.
-class MessageOutput {
- public:
-  virtual void send(std::span<const std::byte> message) noexcept = 0;
-
- protected:
-  ~MessageOutput() = default;
-};
-
-// The tracker behind the endpoint.
-class DutApplication {
- public:
-  // Start (or restart) a run at hello.initial; kNone accepts it.
-  virtual Refusal start(const Hello& hello) noexcept = 0;
-  // The DUT's clock (CAPS.clock_hz ticks), for timestamps.
-  virtual std::uint64_t now() noexcept = 0;
-
- protected:
-  ~DutApplication() = default;
-};
+// The endpoint does no I/O and calls nothing of its caller's (no virtual
+// calls: the firmware's stack report follows every call): it takes a received
+// message and the time, and queues the messages to send in its outbox, which
+// the caller empties after each call (flush). A HELLO waits for the
+// application's answer (pending_hello, answer_hello). deliver() does the
+// three for a message, for any Application with
+//   link::Refusal start(const link::Hello&) noexcept   // kNone accepts the run
+//   std::uint64_t now() noexcept                       // its clock, CAPS.clock_hz ticks
+// and any Output with
+//   void send(std::span<const std::byte> message) noexcept
+// (a stream transport COBS-encodes each message; a message transport sends
+// each as one transfer).
 
 struct ReadyFrame {
   std::uint32_t frame_id = kNoFrame;
@@ -62,21 +53,36 @@ class DutEndpoint {
   // max_frame_bytes size `frame_memory`; its max_payload is what it can
   // receive). The endpoint fills run_id and refusal per HELLO.
   // Precondition (GABARIT_ASSERT): frame_memory.size() >= dut_frame_memory_bytes(...).
-  DutEndpoint(const Caps& caps, std::span<std::uint8_t> frame_memory, DutApplication& app, MessageOutput& out) noexcept;
+  DutEndpoint(const Caps& caps, std::span<std::uint8_t> frame_memory) noexcept;
 
-  // One received message (de-framed). Never trusts it: a bad one is counted.
-  void on_message(std::span<const std::byte> message) noexcept;
+  // One received message (de-framed), at time `now`. Never trusts it: a bad
+  // one is counted.
+  void on_message(std::span<const std::byte> message, std::uint64_t now) noexcept;
   // The stream decoder discarded a run (counted in STATS.framing_errors).
   void on_framing_error() noexcept { ++stats_.framing_errors; }
 
   // The oldest complete frame, which the application then owns until it
   // reports it. false: none (or one is already out).
   bool next_frame(ReadyFrame& frame) noexcept;
-  // The frame from next_frame tracked: `pose` with everything but frame_id,
-  // frame_crc, received and done, which the endpoint fills in; sends POSE.
-  void report_pose(PoseReport pose) noexcept;
-  // The frame from next_frame not tracked: sends EVENT.
-  void report_failure(EventKind kind, EventReason reason, std::uint32_t detail) noexcept;
+  // The frame from next_frame tracked, done at `now`: `pose` with everything
+  // but frame_id, frame_crc, received and done, which the endpoint fills in;
+  // queues POSE.
+  void report_pose(PoseReport pose, std::uint64_t now) noexcept;
+  // The frame from next_frame not tracked: queues EVENT.
+  void report_failure(EventKind kind, EventReason reason, std::uint32_t detail, std::uint64_t now) noexcept;
+
+  // A HELLO that waits for the application's answer (null: none); the
+  // answer queues CAPS.
+  const Hello* pending_hello() const noexcept { return hello_pending_ ? &hello_ : nullptr; }
+  void answer_hello(Refusal refusal) noexcept;
+
+  // The oldest queued message to send (empty: none), and its removal. The
+  // outbox holds kOutboxMessages; a call queues at most two, so emptying it
+  // after every call never loses one (STATS.messages_out counts what was
+  // queued; an overflow would be counted in bad_message, and asserted).
+  std::span<const std::byte> front_outgoing() const noexcept;
+  void pop_outgoing() noexcept;
+  static constexpr std::uint32_t kOutboxMessages = 4;
 
   bool running() const noexcept { return running_; }    // a HELLO accepted, no BYE since
   bool bye_received() const noexcept { return bye_; }
@@ -108,8 +114,7 @@ class DutEndpoint {
 
   Caps caps_;
   std::span<std::uint8_t> memory_;
-  DutApplication& app_;
-  MessageOutput& out_;
+  std::uint64_t now_ = 0;  // the time of the call being handled
   Slot slots_[kMaxFrameSlots];
   std::uint32_t filling_ = kMaxFrameSlots;  // the slot being filled, or none
   std::uint32_t out_slot_ = kMaxFrameSlots; // the slot the application holds, or none
@@ -123,7 +128,28 @@ class DutEndpoint {
   std::uint32_t peer_seq_ = 0;  // the last sequence number accepted (our ack)
   std::uint32_t seq_ = 0;       // ours
   Stats stats_;
-  std::byte tx_[message_bytes(kMinPayload)] = {};
+  Hello hello_;
+  bool hello_pending_ = false;
+  std::byte outbox_[kOutboxMessages][message_bytes(kMinPayload)] = {};
+  std::uint16_t outbox_size_[kOutboxMessages] = {};
+  std::uint32_t outbox_head_ = 0, outbox_count_ = 0;
 };
+
+// One received message through the endpoint: handled, a HELLO answered by
+// the application, the outbox sent.
+template <class Output>
+void flush(DutEndpoint& endpoint, Output& out) noexcept {
+  for (auto m = endpoint.front_outgoing(); !m.empty(); m = endpoint.front_outgoing()) {
+    out.send(m);
+    endpoint.pop_outgoing();
+  }
+}
+
+template <class Application, class Output>
+void deliver(DutEndpoint& endpoint, std::span<const std::byte> message, Application& app, Output& out) noexcept {
+  endpoint.on_message(message, app.now());
+  if (const Hello* hello = endpoint.pending_hello()) endpoint.answer_hello(app.start(*hello));
+  flush(endpoint, out);
+}
 
 }  // namespace gabarit::link
