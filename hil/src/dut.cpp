@@ -229,7 +229,10 @@ std::string hex(std::uint32_t v) {
 class QemuDut final : public DutDriver {
  public:
   explicit QemuDut(QemuOptions o) : options_(std::move(o)) {
-    const ElfSymbol slot = find_elf_symbol(options_.firmware, "gabarit_table_slot");
+    ElfSymbol slot = find_elf_symbol(options_.firmware, "gabarit_table_slot");
+    const ElfSymbol end = find_elf_symbol(options_.firmware, "gabarit_table_slot_end");
+    if (end.address < slot.address) throw app::Error(options_.firmware + ": the table slot ends before it begins");
+    slot.size = end.address - slot.address;
     std::ifstream table(options_.table_path, std::ios::binary | std::ios::ate);
     if (!table) throw app::Error(options_.table_path + ": cannot open the table");
     const auto bytes = static_cast<std::uint64_t>(table.tellg());
@@ -252,11 +255,17 @@ class QemuDut final : public DutDriver {
   std::string description() const override { return quoted(argv()); }
 
   std::vector<std::string> argv() const {
-    return {options_.qemu, "-M", options_.machine, "-nographic", "-monitor", "none",
-            "-icount", "shift=" + std::to_string(options_.icount_shift) + ",sleep=off",
+    std::vector<std::string> icount = {"-icount", "shift=" + std::to_string(options_.icount_shift) + ",sleep=off"};
+    if (options_.icount_shift < 0) icount.clear();
+    std::vector<std::string> a = {options_.qemu, "-M", options_.machine, "-nographic", "-monitor", "none"};
+    a.insert(a.end(), icount.begin(), icount.end());
+    const std::vector<std::string> rest = {
+            "-semihosting-config", "enable=on,target=native",  // a fault ends QEMU (the harness sees a crash)
             "-kernel", options_.firmware,
             "-device", "loader,file=" + options_.table_path + ",addr=" + hex(slot_) + ",force-raw=on",
             "-chardev", "socket,id=link,path=" + socket_path_, "-serial", "chardev:link"};
+    a.insert(a.end(), rest.begin(), rest.end());
+    return a;
   }
 
   void start() override {

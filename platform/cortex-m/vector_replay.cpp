@@ -15,6 +15,7 @@
 #include "gabarit/app/test_vectors.hpp"
 #include "gabarit/table_view.hpp"
 #include "gabarit/tracker.hpp"
+#include "tracker_capacity.hpp"
 
 extern "C" {
 extern const std::byte gabarit_table[], gabarit_table_end[];
@@ -27,18 +28,12 @@ namespace {
 using gabarit::mcu::Line;
 using gabarit::mcu::console_write;
 
-// The largest table the firmware's RAM is sized for: a ROI of up to
-// kMaxRoiSide x kMaxRoiSide pixels centred on the reference point, and up to
-// kMaxCells cells.
-constexpr std::uint16_t kMaxRoiSide = 192;
-constexpr std::int16_t kMaxRoiOrigin = -static_cast<std::int16_t>(kMaxRoiSide / 2);
-constexpr std::uint32_t kMaxCells = 4096;
-constexpr std::size_t kFeatureCapacity =
-    gabarit::tracker_feature_capacity(kMaxRoiSide, kMaxRoiSide, kMaxRoiOrigin, kMaxRoiOrigin);
-constexpr std::size_t kMaskBytes = gabarit::tracker_mask_bytes(kMaxRoiSide, kMaxRoiSide);
+using gabarit::mcu::kFeatureCapacity;
+using gabarit::mcu::kMaskBytes;
+using gabarit::mcu::kMaxCells;
 
 gabarit::RoiPoint g_features[kFeatureCapacity];
-gabarit::VoteCounter g_counters[gabarit::voter_counter_count(kMaxCells)];
+gabarit::VoteCounter g_counters[gabarit::mcu::kCounterCount];
 std::uint8_t g_roi_mask[kMaskBytes];
 // The session vectors' focus stack: views of images in flash.
 gabarit::ImageView g_stack_views[gabarit::vectors::kMaxStackDepths];
@@ -71,8 +66,7 @@ extern "C" int app_main() {
     return fail("table", s);
   // The table's needs against this firmware's static buffers: checked once here.
   const std::size_t features_needed = gabarit::tracker_feature_capacity(table);
-  if (features_needed > kFeatureCapacity || table.cell_count() > kMaxCells ||
-      gabarit::tracker_mask_bytes(table) > kMaskBytes) {
+  if (!gabarit::mcu::table_fits(table)) {
     Line line;
     console_write(line.text("FAIL: table needs ").dec(std::uint64_t{features_needed}).text(" feature slots and ")
                       .dec(std::uint64_t{table.cell_count()}).text(" cells; this firmware has ")

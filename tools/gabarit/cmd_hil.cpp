@@ -44,6 +44,7 @@ void prepare_report_dir(const std::string& dir) {
   if (!empty && !fs::exists(fs::path(dir) / "summary.json") && !fs::exists(fs::path(dir) / "results.jsonl"))
     throw app::Error(dir + ": holds files that are not a HIL report; give a new or empty folder");
   fs::remove(fs::path(dir) / "results.jsonl");
+  fs::remove(fs::path(dir) / "dut.log");  // the DUT's log is appended to across its restarts in a run
 }
 
 }  // namespace
@@ -79,7 +80,8 @@ int hil(const std::vector<std::string>& argv) {
        {"--slots", "N", "inprocess: frames the DUT queues, 1..8 (default 4)"},
        {"--firmware", "ELF", "cortex-m: the HIL firmware (build/cortex-m7/platform/cortex-m/gabarit-firmware-hil.elf)"},
        {"--machine", "NAME", "cortex-m: the QEMU board, mps2-an500 (default) or mps3-an547"},
-       {"--icount", "N", "cortex-m: QEMU -icount shift=N (default 0: one guest instruction per ns)"},
+       {"--icount", "N", "cortex-m: QEMU -icount shift=N,sleep=off (default 0: a guest instruction is 1 ns;\n"
+                          "                          -1: no -icount, guest time then follows the host's)"},
        {"--verilator-dut", "PATH", "verilator: the DUT program (default: gabarit-hil-verilator beside gabarit)"},
        {"--clock-mhz", "F", "verilator: the voter's clock for times (default 48: the UP5K's lowest Fmax over seeds)"},
        {"--timeout", "MS", "declare the DUT hung after this long without an answer to a PING (default per DUT)"}});
@@ -143,7 +145,7 @@ int hil(const std::vector<std::string>& argv) {
     o.firmware = args.get("--firmware");
     o.machine = args.get_or("--machine", "mps2-an500");
     if (o.machine != "mps2-an500" && o.machine != "mps3-an547") throw app::UsageError("--machine: want mps2-an500 or mps3-an547");
-    o.icount_shift = static_cast<int>(args.integer("--icount", 0, 0, 10));
+    o.icount_shift = static_cast<int>(args.integer("--icount", 0, -1, 10));
     o.table_path = table;
     o.log_path = (std::filesystem::path(report) / "dut.log").string();
     dut = hil::make_qemu_dut(o);

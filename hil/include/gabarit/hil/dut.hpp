@@ -63,8 +63,8 @@ struct QemuOptions {
   std::string log_path;     // QEMU's own output
 };
 // The Cortex-M firmware in qemu-system-arm; its UART0 is a Unix socket the
-// harness listens on. The table slot's address comes from the ELF's
-// gabarit_table_slot symbol.
+// harness listens on. The table slot's address and size come from the ELF's
+// gabarit_table_slot and gabarit_table_slot_end symbols.
 std::unique_ptr<DutDriver> make_qemu_dut(const QemuOptions& options);
 
 // The address and size of an ELF32 symbol (the firmware's table slot).

@@ -1,0 +1,191 @@
+// The HIL firmware: a device under test for `gabarit hil run --dut cortex-m`.
+// It validates the table in its flash slot once (which the harness fills
+// before reset), then serves the HIL link on UART0 (COBS-framed,
+// docs/hil-protocol.md): frames in, a TrackingSession with gabarit track's
+// defaults (the recovery search without shared features, which would need
+// ~4 bytes per pixel of its window; depth and angle by intensity with the
+// table's model images), poses out. Timestamps count SysTick at the core
+// clock; under QEMU -icount that is guest time.
+// Every buffer is static, sized by the kernel's constexpr formulas; a table
+// too big for them, or none, is refused in CAPS (no-valid-table).
+#include <cstddef>
+#include <cstdint>
+#include <cstring>
+#include <span>
+
+#include "board.hpp"
+#include "gabarit/crc32.hpp"
+#include "gabarit/link/cobs.hpp"
+#include "gabarit/link/dut_endpoint.hpp"
+#include "gabarit/link/session_report.hpp"
+#include "gabarit/table_format.hpp"
+#include "gabarit/table_view.hpp"
+#include "gabarit/tracking_session.hpp"
+#include "tracker_capacity.hpp"
+#include "uart.hpp"
+
+extern "C" {
+extern const std::byte gabarit_table_slot[], gabarit_table_slot_end[];
+}
+
+namespace {
+
+using namespace gabarit;
+
+// Frames up to 384 x 288 (the scene suite's size) and messages of up to 1 KiB.
+constexpr std::uint32_t kMaxFrameBytes = 384u * 288u;
+constexpr std::size_t kMaxPayload = 1024;
+constexpr std::size_t kMaxStackDepths = 16;
+
+RoiPoint g_features[mcu::kFeatureCapacity];
+VoteCounter g_counters[mcu::kCounterCount];
+std::uint8_t g_roi_mask[mcu::kMaskBytes];
+std::uint8_t g_frame[link::dut_frame_memory_bytes(1, kMaxFrameBytes)];
+std::byte g_rx[link::message_bytes(kMaxPayload)];
+std::uint8_t g_tx[link::cobs_encoded_capacity(link::message_bytes(link::kMinPayload))];
+ImageView g_stack_views[kMaxStackDepths];
+
+// SysTick (every Cortex-M core has one) as a 64-bit clock at the core clock:
+// a 24-bit down-counter read at every message and every frame, so it never
+// wraps twice between two reads within a frame (2^24 cycles is over half a
+// second of guest time; a frame takes about a millisecond).
+class Timer {
+ public:
+  void start() noexcept {
+    reg(kReload) = 0x00FFFFFFu;
+    reg(kCurrent) = 0;                    // any write clears it
+    reg(kControl) = kEnable | kCoreClock;  // no interrupt
+    last_ = reg(kCurrent);
+  }
+  std::uint64_t now() noexcept {
+    const std::uint32_t v = reg(kCurrent);
+    elapsed_ += (last_ - v) & 0x00FFFFFFu;  // counts down, modulo 2^24
+    last_ = v;
+    return elapsed_;
+  }
+
+ private:
+  static constexpr std::uintptr_t kControl = 0xE000E010u, kReload = 0xE000E014u, kCurrent = 0xE000E018u;
+  static constexpr std::uint32_t kEnable = 1u << 0, kCoreClock = 1u << 2;
+  static volatile std::uint32_t& reg(std::uintptr_t address) noexcept {
+    return *reinterpret_cast<volatile std::uint32_t*>(address);
+  }
+  std::uint32_t last_ = 0;
+  std::uint64_t elapsed_ = 0;
+};
+
+class UartOutput {
+ public:
+  explicit UartOutput(mcu::Uart& uart) noexcept : uart_(uart) {}
+  void send(std::span<const std::byte> message) noexcept {
+    std::size_t n = 0;
+    if (link::cobs_encode(message, std::as_writable_bytes(std::span(g_tx)), n) != Status::kOk) return;
+    uart_.write(g_tx, n);
+  }
+
+ private:
+  mcu::Uart& uart_;
+};
+
+class FirmwareDut {
+ public:
+  // `table` is `view` when it opened, else null (and `view` is never used).
+  FirmwareDut(const TableView& view, const TableView* table, Timer& timer) noexcept
+      : table_(table), timer_(timer), session_(view, nullptr, detector_of(view)) {
+    if (table_ != nullptr && table_->has_model_images() && table_->depth_count() <= kMaxStackDepths) {
+      for (std::uint16_t d = 0; d < table_->depth_count(); ++d) g_stack_views[d] = table_->model_image(d);
+      stack_ = FocusStack{std::span<const ImageView>(g_stack_views, table_->depth_count()), table_->model_ref_x(),
+                          table_->model_ref_y(), 2};
+      has_stack_ = true;
+    }
+  }
+  std::uint32_t mode() const noexcept { return link::kModeSession | (has_stack_ ? link::kModeFocusStack : 0u); }
+
+  link::Refusal start(const link::Hello& hello) noexcept {
+    if (table_ == nullptr) return link::Refusal::kNoTable;
+    if (session_.start(SessionOptions{}, hello.initial) != Status::kOk) return link::Refusal::kBadPose;
+    session_.use_focus_stack(has_stack_ ? &stack_ : nullptr);
+    started_ = true;
+    return link::Refusal::kNone;
+  }
+  std::uint64_t now() noexcept { return timer_.now(); }
+
+  bool track_next(link::DutEndpoint& endpoint) noexcept {
+    link::ReadyFrame frame;
+    if (!endpoint.next_frame(frame)) return false;
+    if (!started_) {
+      endpoint.report_failure(link::EventKind::kSkipped, link::EventReason::kNotStarted, 0, now());
+      return true;
+    }
+    TrackerScratch fine;
+    fine.features = g_features;
+    fine.counters = std::span<VoteCounter>(g_counters, voter_counter_count(table_->cell_count()));
+    fine.roi_mask = g_roi_mask;
+    const ImageView image{frame.pixels.data(), frame.width, frame.height, frame.width};
+    SessionResult result;
+    if (const Status s = session_.step(image, {fine, {}, {}}, result); s != Status::kOk) {
+      endpoint.report_failure(link::EventKind::kError, link::EventReason::kTracking, static_cast<std::uint32_t>(s), now());
+      return true;
+    }
+    endpoint.report_pose(link::session_report(result), now());
+    return true;
+  }
+
+ private:
+  const TableView* table_;
+  Timer& timer_;
+  TrackingSession session_;
+  FocusStack stack_;
+  bool has_stack_ = false, started_ = false;
+};
+
+// The table in the slot, validated once: its header's size, then the
+// kernel's checks (structure, CRC). Null when there is none or it does not fit.
+const TableView* open_slot_table(TableView& view, std::uint32_t& bytes, std::uint32_t& crc) noexcept {
+  const std::size_t slot = static_cast<std::size_t>(gabarit_table_slot_end - gabarit_table_slot);
+  std::uint32_t declared = 0;
+  std::memcpy(&declared, gabarit_table_slot + 16, 4);  // file_bytes (docs/table-format.md)
+  if (declared < table_format::kHeaderBytes || declared > slot) return nullptr;
+  const std::span<const std::byte> file(gabarit_table_slot, declared);
+  if (TableView::open(file, view) != Status::kOk || !mcu::table_fits(view)) return nullptr;
+  bytes = declared;
+  crc = crc32(file);
+  return &view;
+}
+
+}  // namespace
+
+extern "C" int app_main() {
+  mcu::Uart uart(mcu::board::kUart0Base);
+  uart.enable_tx_rx();
+  Timer timer;
+  timer.start();
+  TableView view;
+  link::Caps caps;
+  const TableView* table = open_slot_table(view, caps.table_bytes, caps.table_crc);
+  FirmwareDut app(view, table, timer);
+  caps.max_payload = static_cast<std::uint16_t>(kMaxPayload);
+  caps.clock_hz = mcu::board::kCoreClockHz;
+  caps.frame_slots = 1;
+  caps.max_frame_bytes = kMaxFrameBytes;
+  caps.mode = app.mode();
+  link::set_text(caps.kind, "cortex-m");
+  link::set_text(caps.board, mcu::board::kName);
+  link::set_text(caps.firmware, "gabarit 0.1.0");
+  caps.device_id = crc32(std::as_bytes(std::span(mcu::board::kName, std::strlen(mcu::board::kName))));
+  link::DutEndpoint endpoint(caps, g_frame);
+  link::CobsStreamDecoder decoder(g_rx);
+  UartOutput out(uart);
+  for (;;) {
+    const int b = uart.read();
+    if (b < 0) continue;
+    switch (decoder.push(static_cast<std::byte>(b))) {
+      case link::CobsStreamDecoder::Event::kMessage: link::deliver(endpoint, decoder.message(), app, out); break;
+      case link::CobsStreamDecoder::Event::kDiscarded: endpoint.on_framing_error(); break;
+      case link::CobsStreamDecoder::Event::kNone: break;
+    }
+    // A whole frame is tracked before another byte is read (the UART holds
+    // the sender back meanwhile).
+    while (app.track_next(endpoint)) link::flush(endpoint, out);
+  }
+}
