@@ -317,7 +317,7 @@ bool Run::pump(Clock::time_point deadline, Done done) {
     const auto now = Clock::now();
     if (now >= deadline) return false;
     try {
-      if (ping_outstanding_ && now - ping_sent_at_ >= dut_.hang_timeout()) {
+      if (ping_outstanding_ && !awaiting_caps_ && now - ping_sent_at_ >= dut_.hang_timeout()) {
         restart(RestartCause::kHung, "the DUT hung: no answer to a PING in " + std::to_string(dut_.hang_timeout().count()) + " ms");
         continue;
       }
@@ -391,6 +391,7 @@ void Run::restart(RestartCause cause, const std::string& why) {
   for (const std::uint32_t f : lost) resolve(f, Fate::kLostInRestart, why);
   held_.clear();
   held_frame_ = link::kNoFrame;
+  ping_outstanding_ = false;
   dut_.stop();
   try {
     dut_.start();

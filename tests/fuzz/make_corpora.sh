@@ -1,14 +1,17 @@
 #!/usr/bin/env bash
-# make_corpora.sh GABARIT MAKE_TABLE_SEEDS OUTDIR: seed corpora for every
-# fuzz target, made by the project's own tools (nothing committed): tables
-# (make_table_seeds: valid ones and one per loader error), Y4M and PGM from
-# `gabarit synth`, points and pose CSVs from synth, track and by hand.
+# make_corpora.sh GABARIT MAKE_TABLE_SEEDS OUTDIR MAKE_LINK_SEEDS: seed
+# corpora for every fuzz target, made by the project's own tools (nothing
+# committed): tables (make_table_seeds: valid ones and one per loader error),
+# Y4M and PGM from `gabarit synth`, points and pose CSVs from synth, track and
+# by hand, HIL link streams (make_link_seeds).
 set -euo pipefail
 g=${1:?usage: make_corpora.sh GABARIT MAKE_TABLE_SEEDS OUTDIR}
 seeds=${2:?}
 out=${3:?}
+link_seeds=${4:?}
 rm -rf "$out"
-mkdir -p "$out"/{table,y4m,pgm,points_csv,pose_csv}
+mkdir -p "$out"/{table,y4m,pgm,points_csv,pose_csv,link}
+"$link_seeds" "$out/link"
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 "$seeds" "$out/table" > /dev/null
