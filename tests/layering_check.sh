@@ -1,9 +1,11 @@
 #!/usr/bin/env bash
 # Layers point one way (README.md, "Where things are"):
-#   kernel/    includes and links nothing of ours
-#   app/       only the kernel
-#   platform/  the kernel and app/, never tools/
-#   tools/     the kernel and app/, never platform/
+#   kernel/     includes and links nothing of ours
+#   app/        only the kernel
+#   platform/   the kernel and app/, never tools/ or hil/
+#   tools/lib/  (host) the kernel and app/, never platform/ or hil/
+#   hil/        the kernel, app/ and tools/lib/, never platform/
+#   tools/      (the CLI, the bench) all of the above but platform/
 # Checks every quoted #include of every source file in those folders, and the
 # link lines of their CMakeLists.txt. Exits non-zero naming each violation.
 # --self-test plants a violation in a copy and expects it to be caught.
@@ -19,22 +21,32 @@ check() {
     local inc=$1 from=$2
     if [ -f "$top/kernel/include/$inc" ]; then echo kernel
     elif [ -f "$top/app/include/$inc" ]; then echo app
-    elif [ -f "$top/tools/lib/include/$inc" ]; then echo tools
-    elif [ -f "$(dirname "$from")/$inc" ]; then echo "${from#"$top"/}" | cut -d/ -f1
+    elif [ -f "$top/tools/lib/include/$inc" ]; then echo host
+    elif [ -f "$top/hil/include/$inc" ]; then echo hil
+    elif [ -f "$(dirname "$from")/$inc" ]; then layer_of_file "$from"
     else echo other
     fi
+  }
+  layer_of_file() {  # the layer a source file is in
+    case "${1#"$top"/}" in
+      tools/lib/*) echo host ;;
+      *) echo "${1#"$top"/}" | cut -d/ -f1 ;;
+    esac
   }
   allowed() {  # layer dependency
     case "$1:$2" in
       kernel:kernel) return 0 ;;
       app:kernel|app:app) return 0 ;;
       platform:kernel|platform:app|platform:platform|platform:other) return 0 ;;
-      tools:kernel|tools:app|tools:tools|tools:other) return 0 ;;
+      host:kernel|host:app|host:host|host:other) return 0 ;;
+      hil:kernel|hil:app|hil:host|hil:hil|hil:other) return 0 ;;
+      tools:kernel|tools:app|tools:host|tools:hil|tools:tools|tools:other) return 0 ;;
     esac
     return 1
   }
-  for layer in kernel app platform tools; do
+  for top_dir in kernel app platform tools hil; do
     while IFS= read -r file; do
+      layer=$(layer_of_file "$file")
       while IFS= read -r inc; do
         dep=$(layer_of "$inc" "$file")
         if ! allowed "$layer" "$dep"; then
@@ -42,15 +54,17 @@ check() {
           status=1
         fi
       done < <(sed -n 's/^[[:space:]]*#[[:space:]]*include[[:space:]]*"\([^"]*\)".*/\1/p' "$file")
-    done < <(find "$top/$layer" -type f \( -name '*.cpp' -o -name '*.hpp' -o -name '*.h' -o -name '*.cc' \))
+    done < <(find "$top/$top_dir" -type f \( -name '*.cpp' -o -name '*.hpp' -o -name '*.h' -o -name '*.cc' \))
   done
   # Link lines: which of our libraries each layer's CMake files name.
   declare -A owner=(
     [gabarit_kernel]=kernel [gabarit::kernel]=kernel
     [gabarit_app]=app [gabarit::app]=app [gabarit_test_vectors]=app [gabarit::test_vectors]=app
-    [gabarit_host]=tools [gabarit::host]=tools [gabarit_bench_lib]=tools
+    [gabarit_link]=app [gabarit::link]=app
+    [gabarit_host]=host [gabarit::host]=host [gabarit_bench_lib]=tools
+    [gabarit_hil]=hil [gabarit::hil]=hil
     [gabarit_board]=platform)
-  for layer in kernel app platform tools; do
+  for layer in kernel app platform tools hil; do
     while IFS= read -r cmake; do
       while IFS= read -r name; do
         dep=${owner[$name]:-}
@@ -68,14 +82,17 @@ check() {
 if [ "${2:-}" = "--self-test" ]; then
   scratch=$(mktemp -d)
   trap 'rm -rf "$scratch"' EXIT
-  cp -r kernel app platform tools "$scratch"/
+  cp -r kernel app platform tools hil "$scratch"/
   check "$scratch" > /dev/null || { echo "layering self-test: the clean copy already fails"; exit 1; }
   echo '#include "gabarit/host/table_builder.hpp"' >> "$scratch/platform/linux/luma.cpp"
   if check "$scratch" > /dev/null; then echo "layering self-test: a planted platform -> tools include was not caught"; exit 1; fi
   cp platform/linux/luma.cpp "$scratch/platform/linux/luma.cpp"
   echo '#include "gabarit/app/args.hpp"' >> "$scratch/kernel/src/voter.cpp"
   if check "$scratch" > /dev/null; then echo "layering self-test: a planted kernel -> app include was not caught"; exit 1; fi
+  cp kernel/src/voter.cpp "$scratch/kernel/src/voter.cpp"
+  echo '#include "gabarit/hil/harness.hpp"' >> "$scratch/tools/lib/src/synth.cpp"
+  if check "$scratch" > /dev/null; then echo "layering self-test: a planted host -> hil include was not caught"; exit 1; fi
   echo "layering self-test: planted violations caught"
   exit 0
 fi
-if check "$PWD"; then echo "layering: kernel <- app <- {platform, tools}, no other edges"; else exit 1; fi
+if check "$PWD"; then echo "layering: kernel <- app <- {platform, tools/lib <- hil <- tools}, no other edges"; else exit 1; fi
