@@ -67,7 +67,10 @@ void StreamTransport::send(std::span<const std::byte> message, Clock::time_point
   apply_flips(wire);
   std::size_t at = 0;
   while (at < wire.size()) {
-    const ssize_t w = ::write(write_fd_, wire.data() + at, wire.size() - at);
+    // A socket never raises SIGPIPE here (a DUT that died is an error, not
+    // the end of the harness); a pipe falls back to write().
+    ssize_t w = ::send(write_fd_, wire.data() + at, wire.size() - at, MSG_NOSIGNAL);
+    if (w < 0 && errno == ENOTSOCK) w = ::write(write_fd_, wire.data() + at, wire.size() - at);
     if (w > 0) {
       at += static_cast<std::size_t>(w);
       continue;
