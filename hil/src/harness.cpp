@@ -158,6 +158,7 @@ class Run {
   bool awaiting_caps_ = false;
   std::uint32_t run_id_ = 0;
   std::uint32_t seq_ = 0, peer_seq_ = 0;
+  bool peer_seq_valid_ = false;  // false until the DUT's first message (again after a restart)
   std::map<std::uint32_t, app::GrayImage> images_;  // sent, not yet resolved
   std::set<std::uint32_t> outstanding_;
   std::vector<std::vector<std::byte>> held_;  // a reordered frame's messages
@@ -231,7 +232,8 @@ void Run::handle(const std::vector<std::byte>& message) {
     ++result_.bad_messages_in;
     return;
   }
-  if (link::seq_after(h.seq, peer_seq_) || seq_ == 0) peer_seq_ = h.seq;
+  if (!peer_seq_valid_ || link::seq_after(h.seq, peer_seq_)) peer_seq_ = h.seq;  // our ack
+  peer_seq_valid_ = true;
   const auto decoded = [&](auto& m) {
     if (link::decode(payload, m) == Status::kOk) return true;
     ++result_.bad_messages_in;
@@ -392,6 +394,7 @@ void Run::restart(RestartCause cause, const std::string& why) {
   held_.clear();
   held_frame_ = link::kNoFrame;
   ping_outstanding_ = false;
+  peer_seq_valid_ = false;  // a restarted DUT numbers its messages from 0
   dut_.stop();
   try {
     dut_.start();
@@ -424,6 +427,7 @@ void Run::send_frame(std::uint32_t index, const app::GrayImage& image, const Pla
   outstanding_.insert(index);
   newest_sent_ = index;
   result_.pixel_bytes_sent += total;
+  record.pixel_bytes = static_cast<std::uint32_t>(total);
   const std::uint64_t before = wire().bytes_sent();
   std::size_t flip_message = messages.size();
   std::vector<std::uint64_t> flip_positions;
@@ -456,7 +460,7 @@ void Run::send_frame(std::uint32_t index, const app::GrayImage& image, const Pla
         flip_positions = positions;  // armed just before that message goes, below
         break;
       }
-      case FaultKind::kRestart: break;  // done before the frame
+      case FaultKind::kRestart: injected.detail = "the DUT stopped and started again before the frame"; break;
     }
   }
   const bool drop = fault != nullptr && fault->kind == FaultKind::kDrop;

@@ -80,7 +80,11 @@ struct Figures {
 Figures figures(const RunResult& result) {
   Figures f;
   std::vector<double> latency, dut, cycles;
+  double overhead = 0;
+  std::size_t clean = 0;
   for (const FrameRecord& r : result.frames) {
+    // The overhead of a frame sent once, unfaulted, and answered with a pose.
+    if (r.pose && r.fault < 0) overhead += static_cast<double>(r.wire_bytes) - r.pixel_bytes, ++clean;
     if (r.fate != Fate::kPending || r.sent_us >= 0) ++f.fates[r.fate];
     if (r.sent_us >= 0) ++f.sent;
     if (!r.pose) continue;
@@ -93,10 +97,8 @@ Figures figures(const RunResult& result) {
   f.latency = summarise(latency);
   f.dut = summarise(dut);
   f.cycles = summarise(cycles);
-  if (f.sent > 0) {
-    f.overhead_bytes = (static_cast<double>(result.wire_bytes) - static_cast<double>(result.pixel_bytes_sent)) / static_cast<double>(f.sent);
-    f.codec_us = result.host_codec_seconds * 1e6 / static_cast<double>(f.sent);
-  }
+  if (clean > 0) f.overhead_bytes = overhead / static_cast<double>(clean);
+  if (f.sent > 0) f.codec_us = result.host_codec_seconds * 1e6 / static_cast<double>(f.sent);
   return f;
 }
 
@@ -365,8 +367,9 @@ void write_report(const std::string& dir, const RunConfig& config, const RunResu
     << c.clock_hz << " Hz) | " << num(f.dut.p50, 1) << " | " << num(f.dut.p99, 1) << " | " << num(f.dut.max, 1) << " |\n";
   if (f.cycles.samples)
     m << "| voter cycles per frame | " << num(f.cycles.p50, 0) << " | " << num(f.cycles.p99, 0) << " | " << num(f.cycles.max, 0) << " |\n";
-  m << "\nProtocol overhead per frame: " << num(f.overhead_bytes, 1) << " bytes on the wire beyond the pixels, "
-    << num(f.codec_us, 2) << " us of host time (headers, CRC-32C, COBS).\n\n";
+  m << "\nProtocol overhead per frame: " << num(f.overhead_bytes, 1)
+    << " bytes on the wire beyond the pixels (frames sent once and posed, their POSE included), " << num(f.codec_us, 2)
+    << " us of host time (headers, CRC-32C, COBS, per frame sent).\n\n";
   if (!truth.empty())
     m << "Accuracy against ground truth: " << a.within_1px << " of " << a.frames << " posed frames within 1 px, mean error "
       << num(a.mean_error_px, 3) << " px, " << a.missing << " visible frames without a pose.\n\n";

@@ -46,7 +46,7 @@ struct FrameRecord {
   std::uint32_t repeats = 0;      // duplicate arrivals the DUT reported
   int fault = -1;                 // index into RunResult::faults, if faulted
   std::uint64_t wire_bytes = 0;   // bytes on the wire for it (both ways, framing included)
-  double codec_us = 0;            // host time encoding its messages and decoding its answer
+  std::uint32_t pixel_bytes = 0;  // its pixels (width x height)
 };
 
 struct InjectedFault {
