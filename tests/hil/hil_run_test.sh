@@ -9,7 +9,7 @@
 #   faults  the binary sequence with 5% of its frames faulted at random: every
 #           frame accounted for, poses in order, every fault in the JUnit file,
 #           detected and recovered from
-#   soak    10^4 small binary frames with 1% faulted (the target)
+#   soak    10^4 small binary frames with 1% faulted (80x80; 40x40 on cortex-m)
 # Sizes shrink for the cortex-m DUT (QEMU's UART moves about 12 KB/s).
 set -euo pipefail
 g=${1:?usage: hil_run_test.sh GABARIT DUT SCENARIO [options]}
@@ -34,8 +34,13 @@ case "$scenario" in
     "$g" tables build --model "$seq"/model_0*.pgm --x -3:3:7 --y -3:3:7 --theta -1.5:1.5:5 -o "$seq/table.gbt" 2> /dev/null ;;
   soak)
     frames=10000
-    "$g" synth --shape random --points 60 --frames $frames --max-step 3 --noise 0.02 --size 80x80 --seed 11 -o "$seq" 2> /dev/null
-    "$g" tables build --model "$seq/model.pgm" --binary --x -4:4:9 --y -4:4:9 -o "$seq/table.gbt" 2> /dev/null
+    if [ $small = 1 ]; then  # 40x40 frames: about 25 minutes through QEMU's UART
+      "$g" synth --shape random --points 24 --frames $frames --max-step 2 --noise 0.02 --size 40x40 --seed 12 -o "$seq" 2> /dev/null
+      "$g" tables build --model "$seq/model.pgm" --binary --x -3:3:7 --y -3:3:7 -o "$seq/table.gbt" 2> /dev/null
+    else
+      "$g" synth --shape random --points 60 --frames $frames --max-step 3 --noise 0.02 --size 80x80 --seed 11 -o "$seq" 2> /dev/null
+      "$g" tables build --model "$seq/model.pgm" --binary --x -4:4:9 --y -4:4:9 -o "$seq/table.gbt" 2> /dev/null
+    fi
     faults=(--faults random:0.01 --seed 3) ;;
   *) echo "unknown scenario $scenario"; exit 2 ;;
 esac
