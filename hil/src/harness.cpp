@@ -61,8 +61,7 @@ using link::MessageType;
 class Reference {
  public:
   Reference(const TableView& table, std::uint32_t mode)
-      : table_(table),
-        options_(app::session_options((mode & link::kModeSession) == 0, false, false, false)),
+      : options_(app::session_options((mode & link::kModeSession) == 0, false, false, false)),
         buffers_(table, nullptr, app::VoterChoice::kAuto, options_.recover && (mode & link::kModeSharedSearch) != 0),
         stack_(table),
         use_stack_((mode & link::kModeFocusStack) != 0),
@@ -106,7 +105,6 @@ class Reference {
   }
 
  private:
-  const TableView& table_;
   SessionOptions options_;
   app::SessionBuffers buffers_;
   app::TableFocusStack stack_;
