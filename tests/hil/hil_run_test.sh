@@ -9,6 +9,7 @@
 #   faults  the binary sequence with 5% of its frames faulted at random: every
 #           frame accounted for, poses in order, every fault in the JUnit file,
 #           detected and recovered from
+#   plan    each fault kind once, from a plan file, on 24 small frames (48x48)
 #   soak    10^4 small binary frames with 1% faulted (80x80; 40x40 on cortex-m)
 # Sizes shrink for the cortex-m DUT (QEMU's UART moves about 12 KB/s).
 set -euo pipefail
@@ -24,14 +25,20 @@ small=0
 faults=()
 case "$scenario" in
   binary|faults)
-    if [ $small = 1 ]; then size=96x96 frames=24; else size=160x160 frames=120; fi
+    if [ $small = 1 ]; then size=96x96 frames=12; else size=160x160 frames=120; fi
     [ "$scenario" = faults ] && { frames=$((frames * 2)); faults=(--faults random:0.05 --seed 4); }
     "$g" synth --shape curve --frames $frames --max-step 3 --noise 0.02 --size $size --seed 3 -o "$seq" 2> /dev/null
     "$g" tables build --model "$seq/model.pgm" --binary --x -4:4:9 --y -4:4:9 -o "$seq/table.gbt" 2> /dev/null ;;
   scene)
-    if [ $small = 1 ]; then frames=8; else frames=40; fi
+    if [ $small = 1 ]; then frames=5; else frames=40; fi
     "$g" synth --scene coin --depths 2 --motion spin --occlusion 0:0 --frames $frames --size 180x140 --seed 2 -o "$seq" 2> /dev/null
     "$g" tables build --model "$seq"/model_0*.pgm --x -3:3:7 --y -3:3:7 --theta -1.5:1.5:5 -o "$seq/table.gbt" 2> /dev/null ;;
+  plan)
+    frames=24
+    "$g" synth --shape random --points 30 --frames $frames --max-step 2 --noise 0.02 --size 48x48 --seed 6 -o "$seq" 2> /dev/null
+    "$g" tables build --model "$seq/model.pgm" --binary --x -3:3:7 --y -3:3:7 -o "$seq/table.gbt" 2> /dev/null
+    printf '3 drop\n6 duplicate\n9 reorder\n12 corrupt\n15 bitflip\n18 restart\n' > "$work/plan.txt"
+    faults=(--faults "$work/plan.txt") ;;
   soak)
     frames=10000
     if [ $small = 1 ]; then  # 40x40 frames: about 25 minutes through QEMU's UART
@@ -66,6 +73,9 @@ if scenario in ("binary", "scene"):
 else:
     need(len(s["faults"]) > 0, "no fault was injected")
     need(all(f["detected"] and f["recovered"] for f in s["faults"]), "a fault was not detected or not recovered from")
+    if scenario == "plan":
+        kinds = sorted(f["kind"] for f in s["faults"])
+        need(kinds == sorted(["drop", "duplicate", "reorder", "corrupt", "bitflip", "restart"]), f"the plan's faults: {kinds}")
 suite = ET.parse(f"{report}/junit.xml").getroot().find("testsuite")
 names = [t.get("name") for t in suite.findall("testcase")]
 need(len(names) == len(s["checks"]), "the JUnit file does not have one testcase per check")

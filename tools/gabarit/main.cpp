@@ -72,8 +72,12 @@ int main(int argc, char** argv) {
     if (command == "eval") return gabarit::cli::eval(args);
     if (command == "vectors") return gabarit::cli::vectors(args);
     if (command == "hil") {
+#if GABARIT_HAVE_HIL
       if (!args.empty() && args[0] == "run") command += " run";
       return gabarit::cli::hil(args);
+#else
+      throw gabarit::app::Error("hil: this build has no HIL harness (it is built for the host only)");
+#endif
     }
     throw gabarit::app::UsageError("unknown command '" + command + "'");
   } catch (const gabarit::app::UsageError& e) {
