@@ -1,0 +1,330 @@
+// The thesis's second tracker (chapter 3): a particle filter (CONDENSATION)
+// over the same 4-DOF pose as the stencil tracker, with the chapter's
+// improvements against clutter and occlusion, each switchable.
+//
+// One frame (ParticleFilter::step):
+//   1. picking and propagation (ParticlePropagation): particles are picked
+//      in proportion to their weights (systematic resampling), moved by the
+//      estimate's velocity and diffused by Gaussian noise; a fraction may be
+//      re-drawn around a recovered pose instead (partial re-initialisation);
+//   2. image loading (FrameLoader): once per frame, what the measure reads
+//      (an edge map of the particles' window);
+//   3. observation (ParticleMeasure): each particle's weight, the likelihood
+//      of the frame at its pose;
+//   4. compensation (ParticleCompensation): weights re-weighted by kinematics
+//      (over-weighting near the predicted pose, in proportion to confidence);
+//   5. result analysis (ParticleAnalysis): particles sorted by weight and
+//      clustered into modes; the few heaviest modes disambiguated by a finer
+//      measure; the output mode chosen by mode filtering (within an adaptive
+//      distance of the prediction); the estimate is that mode's weighted mean.
+// Each stage is a plain interface (abstract class, no virtual destructor: the
+// filter never owns or deletes one) with the default implementation below;
+// a firmware engineer swaps one by passing another.
+//
+// Improvements and the thesis sections they come from (each an option):
+//   modes (3.5.3): sorted by weight (LSD radix sort, O(n)), then one pass
+//     assigns each particle to the first of at most kMaxParticleModes modes
+//     whose seed (its heaviest particle) is within the mode radius
+//     ((dx^2 + dy^2) / r_px^2 + dtheta^2 / r_deg^2 <= 1, same depth), else
+//     seeds a new mode: O(n kMaxParticleModes) = O(n);
+//   disambiguation (3.5.4): the heaviest disambiguate_modes modes scored
+//     again by the finer measure; the best of those is the best mode;
+//   narrowing (3.6.1): the diffusion's sigma scales from 1 (no confidence)
+//     down to narrow_min (full confidence);
+//   kinematic over-weighting (3.6.2): w *= 1 + gain c exp(-d^2/2), d the
+//     particle's normalised distance to the predicted pose, c the last
+//     frame's confidence in [0, 1];
+//   partial re-initialisation (3.6.3): each frame after an unconfident one
+//     draws reinit_fraction of the particles around the last confident
+//     estimate (or around a pose the caller recovered elsewhere,
+//     reinitialise_around), so a filter led astray can fall back;
+//   mode filtering (3.6.4): the output is the best mode within an adaptive
+//     distance of the prediction (base + |vx| + |vy|, growing each
+//     unconfident frame); a far mode is taken only after mode_filter_patience frames.
+// With every option off the filter is plain CONDENSATION: resample, diffuse,
+// weigh, report the weighted mean.
+//
+// Determinism: a SplitMix64 generator seeded by the caller, Gaussian noise
+// as a sum of four uniforms (Irwin-Hall, only + and *), the kernel's own
+// sine and cosine (deterministic_math.hpp) and -ffp-contract=off: the same
+// seed and frames give the same bits on every target.
+// No heap: the particles and the sort's indices come from the caller
+// (ParticleScratch, sized by particle_scratch_*).
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <span>
+
+#include "gabarit/image_view.hpp"
+#include "gabarit/motion_filter.hpp"
+#include "gabarit/pose.hpp"
+#include "gabarit/status.hpp"
+#include "gabarit/tracker.hpp"
+
+namespace gabarit {
+
+struct Particle {
+  Pose pose;
+  float weight = 0.0f;
+};
+
+// SplitMix64 (Steele, Lea and Flood 2014): 64 bits of state, the same
+// sequence on every target.
+class ParticleRng {
+ public:
+  explicit ParticleRng(std::uint64_t seed = 0) noexcept : state_(seed) {}
+  std::uint64_t next() noexcept {
+    std::uint64_t z = (state_ += 0x9E3779B97F4A7C15ull);
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    return z ^ (z >> 31);
+  }
+  // Uniform in [0, 1): the top 24 bits.
+  float uniform() noexcept { return static_cast<float>(next() >> 40) * (1.0f / 16777216.0f); }
+  // Approximately standard normal (bounded by +-3.46): the sum of four
+  // uniforms, centred and scaled to unit variance.
+  float normal() noexcept {
+    const float s = uniform() + uniform() + uniform() + uniform();
+    return (s - 2.0f) * 1.7320508f;
+  }
+
+ private:
+  std::uint64_t state_;
+};
+
+inline constexpr std::uint32_t kMaxParticleModes = 16;
+inline constexpr std::uint32_t kMaxParticles = 1u << 20;
+
+// Caller-owned memory for n particles.
+constexpr std::size_t particle_scratch_particles(std::uint32_t n) noexcept { return n; }      // each of cloud and next
+constexpr std::size_t particle_scratch_order(std::uint32_t n) noexcept { return 2 * std::size_t{n}; }
+struct ParticleScratch {
+  std::span<Particle> cloud;        // n particles (n = its size, 1..kMaxParticles)
+  std::span<Particle> next;         // >= n
+  std::span<std::uint32_t> order;   // >= 2n: the radix sort's indices
+};
+
+struct ParticleMode {
+  Pose pose;                // the weighted mean of its particles (its seed's depth)
+  float weight = 0.0f;      // its share of the total weight
+  float score = 0.0f;       // the finer measure's score, with disambiguation (else the measure's)
+  std::uint32_t particles = 0;
+};
+
+struct ParticleFilterOptions {
+  // Propagation (3.3): diffusion per frame, before narrowing.
+  float sigma_px = 2.0f;
+  float sigma_deg = 1.0f;
+  float depth_change = 0.1f;        // probability of moving to a neighbouring depth
+  bool constant_velocity = true;    // move particles by the estimate's velocity
+  // The measure's likelihood is its score raised to this power (1..64):
+  // sharper weights concentrate the cloud faster.
+  std::uint32_t sharpness = 8;
+  // 3.5.3: modes.
+  bool modes = true;
+  float mode_radius_px = 4.0f;
+  float mode_radius_deg = 3.0f;
+  std::uint32_t max_modes = 8;      // 1..kMaxParticleModes
+  // 3.5.4: disambiguation of the heaviest modes by the finer measure.
+  bool disambiguate = true;
+  std::uint32_t disambiguate_modes = 3;
+  // 3.6.1: narrowing the spread with confidence.
+  bool narrow_spread = true;
+  float narrow_min = 0.4f;
+  // 3.6.2: kinematic over-weighting.
+  bool kinematic_weighting = true;
+  float kinematic_gain = 1.0f;
+  float kinematic_px = 2.0f;        // distance scales of the over-weighting
+  float kinematic_deg = 1.0f;
+  // 3.6.3: partial re-initialisation.
+  bool partial_reinit = true;
+  float reinit_fraction = 0.1f;
+  float reinit_px = 3.0f;
+  float reinit_deg = 1.5f;
+  // 3.6.4: mode filtering with an adaptive distance.
+  bool mode_filter = true;
+  float mode_filter_px = 6.0f;      // base distance
+  float mode_filter_growth_px = 3.0f;  // added per unconfident frame
+  std::uint32_t mode_filter_patience = 5;
+  // Confidence: the chosen mode's score over the reference (the first
+  // frame's), high at >= high_ratio, lost below lost_ratio.
+  float high_ratio = 0.7f;
+  float lost_ratio = 0.35f;
+  // While lost, the diffusion grows by this factor per frame, up to lost_spread_max.
+  float lost_spread_growth = 1.3f;
+  float lost_spread_max = 4.0f;
+};
+bool valid(const ParticleFilterOptions& options) noexcept;
+
+// Plain CONDENSATION: every improvement off.
+ParticleFilterOptions plain_condensation() noexcept;
+
+// 5. Image loading: once per frame, before any particle is weighed, with the
+// window the particles (and the measure's reach) cover, clipped to the image.
+class FrameLoader {
+ public:
+  [[nodiscard]] virtual Status load(const ImageView& image, const ImageWindow& window) noexcept = 0;
+
+ protected:
+  ~FrameLoader() = default;
+};
+
+// 3. Observation. prepare is called once per frame after the loader, with
+// the predicted pose (where the cloud is expected); weigh writes each
+// particle's score in [0, 1] to its weight; score gives one pose's.
+class ParticleMeasure {
+ public:
+  [[nodiscard]] virtual Status prepare(const ImageView& image, const Pose& predicted) noexcept = 0;
+  virtual void weigh(std::span<Particle> particles) noexcept = 0;
+  virtual float score(const Pose& pose) noexcept = 0;
+  // How far (pixels) beyond a pose the measure reads the frame: the loader's
+  // window covers the particles plus this.
+  virtual std::uint32_t reach_px() const noexcept = 0;
+
+ protected:
+  ~ParticleMeasure() = default;
+};
+
+// What the policies know of the filter's state.
+struct ParticleContext {
+  Pose estimate;            // last frame's estimate
+  Pose predicted;           // this frame's prediction (estimate + velocity)
+  float vx = 0.0f, vy = 0.0f, vtheta = 0.0f;  // per frame
+  float confidence = 0.0f;  // last frame's, in [0, 1]
+  float spread = 1.0f;      // diffusion scale this frame (narrowing, growth while lost)
+  bool lost = false;
+  Pose reinit_centre;       // where partial re-initialisation draws
+  float reinit_fraction = 0.0f;  // this frame's
+  std::uint32_t unconfident_frames = 0;  // frames since the last confident one
+  std::uint32_t held_frames = 0;         // consecutive frames mode filtering held the prediction
+  std::uint16_t depth_count = 1;
+  const ParticleFilterOptions* options = nullptr;
+};
+
+// 1. Picking and propagation: `next` from the weighted `cloud` (same size).
+class ParticlePropagation {
+ public:
+  virtual void propagate(std::span<const Particle> cloud, std::span<Particle> next, const ParticleContext& context,
+                         ParticleRng& rng) noexcept = 0;
+
+ protected:
+  ~ParticlePropagation() = default;
+};
+
+// 4. Compensation: after the measure, before analysis.
+class ParticleCompensation {
+ public:
+  virtual void compensate(std::span<Particle> particles, const ParticleContext& context) noexcept = 0;
+
+ protected:
+  ~ParticleCompensation() = default;
+};
+
+// 5. Result analysis: modes (at most modes.size()) and the index of the output one.
+struct ParticleAnalysisResult {
+  std::uint32_t modes = 0;
+  std::uint32_t chosen = 0;
+  std::uint32_t best = 0;         // the best mode (before mode filtering)
+  bool held = false;              // mode filtering kept the prediction: no mode near enough
+};
+class ParticleAnalysis {
+ public:
+  virtual void analyse(std::span<const Particle> particles, std::span<std::uint32_t> order, const ParticleContext& context,
+                       ParticleMeasure* finer, std::span<ParticleMode> modes, ParticleAnalysisResult& out) noexcept = 0;
+
+ protected:
+  ~ParticleAnalysis() = default;
+};
+
+// The defaults, driven by ParticleFilterOptions.
+class DefaultPropagation final : public ParticlePropagation {
+ public:
+  void propagate(std::span<const Particle> cloud, std::span<Particle> next, const ParticleContext& context,
+                 ParticleRng& rng) noexcept override;
+};
+class KinematicCompensation final : public ParticleCompensation {
+ public:
+  void compensate(std::span<Particle> particles, const ParticleContext& context) noexcept override;
+};
+class ModeAnalysis final : public ParticleAnalysis {
+ public:
+  void analyse(std::span<const Particle> particles, std::span<std::uint32_t> order, const ParticleContext& context,
+               ParticleMeasure* finer, std::span<ParticleMode> modes, ParticleAnalysisResult& out) noexcept override;
+};
+
+// Sorts indices 0..n-1 of `particles` by weight, heaviest first, ties by
+// index (stable LSD radix sort on the weights' bits; weights >= 0).
+// Precondition: order.size() >= 2n; the result is order[0, n).
+void sort_by_weight(std::span<const Particle> particles, std::span<std::uint32_t> order) noexcept;
+
+struct ParticleEstimate {
+  Pose pose;
+  float score = 0.0f;         // the chosen mode's score
+  float confidence = 0.0f;    // score / reference over high_ratio, clamped to [0, 1]
+  TrackState state = TrackState::kLost;
+  std::uint32_t modes = 0;
+  std::uint32_t mode_particles = 0;
+  float mode_weight = 0.0f;
+  bool held = false;          // mode filtering held the prediction
+  bool reinitialised = false; // part of the cloud was re-drawn this frame
+};
+
+struct ParticlePolicies {
+  FrameLoader* loader = nullptr;          // optional
+  ParticleMeasure* measure = nullptr;     // required
+  ParticleMeasure* finer = nullptr;       // optional: disambiguation and confidence
+  ParticlePropagation* propagation = nullptr;  // null: DefaultPropagation
+  ParticleCompensation* compensation = nullptr;  // null: KinematicCompensation
+  ParticleAnalysis* analysis = nullptr;   // null: ModeAnalysis
+};
+
+class ParticleFilter {
+ public:
+  explicit ParticleFilter(const ParticlePolicies& policies) noexcept;
+  // Errors: kInvalidArgument for bad options, no measure, a pose outside
+  // pose_in_range, depth_count 0 or initial.depth >= depth_count;
+  // kBufferTooSmall for scratch short of the sizes above (cloud empty or
+  // over kMaxParticles is kInvalidArgument).
+  [[nodiscard]] Status start(const ParticleFilterOptions& options, const Pose& initial, std::uint16_t depth_count,
+                             std::uint64_t seed, ParticleScratch scratch) noexcept;
+  // Errors: kInvalidArgument for an invalid image or before start(); the
+  // loader's and the measure's.
+  [[nodiscard]] Status step(const ImageView& image, ParticleEstimate& out) noexcept;
+  // Partial re-initialisation around a pose found elsewhere (the stencil
+  // tracker's, a detector's): the next step draws `fraction` (0..1) of the
+  // cloud around it. Ignored for a pose outside pose_in_range.
+  void reinitialise_around(const Pose& pose, float fraction) noexcept;
+  // Spreads the whole cloud uniformly over a region of the image (x0..x1,
+  // y0..y1, theta0..theta1, every depth), for a search from nothing: the next
+  // step measures it. Errors: kInvalidArgument before start() or for an empty
+  // or non-finite region.
+  [[nodiscard]] Status scatter(float x0, float x1, float y0, float y1, float theta0_deg, float theta1_deg) noexcept;
+
+  const ParticleContext& context() const noexcept { return context_; }
+  std::span<const Particle> particles() const noexcept { return cloud_; }
+  std::span<const ParticleMode> modes() const noexcept { return {modes_, mode_count_}; }
+
+ private:
+  ParticlePolicies policies_;
+  DefaultPropagation default_propagation_;
+  KinematicCompensation default_compensation_;
+  ModeAnalysis default_analysis_;
+  ParticleFilterOptions options_;
+  ParticleContext context_;
+  ParticleRng rng_;
+  std::span<Particle> cloud_, next_;
+  std::span<std::uint32_t> order_;
+  ParticleMode modes_[kMaxParticleModes];
+  std::uint32_t mode_count_ = 0;
+  float reference_ = 0.0f;          // the score at the first frame (0: not yet)
+  std::uint32_t unconfident_ = 0;   // frames since the last confident one
+  std::uint32_t held_ = 0;          // consecutive frames mode filtering held
+  Pose last_confident_;
+  bool started_ = false;
+  bool scattered_ = false;          // the cloud was scattered: the next step skips propagation
+  Pose external_reinit_;
+  float external_fraction_ = 0.0f;
+};
+
+}  // namespace gabarit

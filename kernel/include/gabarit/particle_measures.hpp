@@ -1,0 +1,124 @@
+// The particle filter's image loading and measures (particle_filter.hpp):
+//
+//  - EdgeMapLoader: the frame's features (the table's detector: Canny,
+//    gradient rows or binary) over the particles' window, as one bit per
+//    pixel. It detects in strips of rows, as many as its feature scratch
+//    holds, so an MCU bounds its RAM at one bit per window pixel plus one
+//    strip's features.
+//  - EdgeCorrelationMeasure (thesis 3.4.3): the fraction of the model's
+//    feature points (the table's model points of the particle's depth,
+//    every stride-th) that land on an edge pixel, or within `tolerance`
+//    pixels of one, when placed at the particle's pose:
+//      score(P) = |{m : edge near round((x, y) + R(theta) m)}| / |M|.
+//    Cost per particle: |M| / stride point transforms and bit tests.
+//  - StencilVoteMeasure: the stencil vote reused. Once per frame the table's
+//    ROI is voted at the prediction (prepare_frame and the voter, as
+//    track_step); a particle's score is then the normalised vote of the cell
+//    that contains its motion from the prediction (its stencil's share of
+//    features), 0 outside the table's range. Cost per particle: one cell
+//    lookup; per frame: one vote.
+// No heap: the bitmap, the features and the counters come from the caller.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <span>
+
+#include "gabarit/particle_filter.hpp"
+#include "gabarit/table_view.hpp"
+#include "gabarit/tracker.hpp"
+#include "gabarit/voter.hpp"
+
+namespace gabarit {
+
+// Words of the edge bitmap for a window of w x h pixels.
+constexpr std::size_t edge_map_words(std::uint32_t width, std::uint32_t height) noexcept {
+  return std::size_t{height} * ((std::size_t{width} + 63) / 64);
+}
+
+// One bit per pixel of an image window: set where the detector found a feature.
+struct EdgeMap {
+  ImageWindow window;
+  std::span<const std::uint64_t> bits;
+  std::uint32_t words_per_row = 0;
+  std::uint32_t features = 0;
+  std::uint32_t dropped = 0;  // features beyond the loader's strip scratch (a strip of one row overflowed)
+
+  // Precondition: none (outside the window is false).
+  bool at(std::int32_t x, std::int32_t y) const noexcept {
+    const std::int32_t c = x - window.x0, r = y - window.y0;
+    if (c < 0 || r < 0 || c >= window.width || r >= window.height) return false;
+    const std::uint64_t word = bits[static_cast<std::size_t>(r) * words_per_row + static_cast<std::uint32_t>(c) / 64];
+    return ((word >> (static_cast<std::uint32_t>(c) & 63u)) & 1u) != 0;
+  }
+  // A feature in the (2 t + 1)^2 square around (x, y).
+  bool near(std::int32_t x, std::int32_t y, std::uint32_t t) const noexcept;
+};
+
+class EdgeMapLoader final : public FrameLoader {
+ public:
+  // bits: edge_map_words of the largest window loaded (load clips larger
+  // windows to what the bitmap holds, keeping the window's centre);
+  // features: at least the widest window's width (one strip of one row).
+  EdgeMapLoader(const Detector& detector, std::span<std::uint64_t> bits, std::span<RoiPoint> features,
+                std::uint16_t max_width, std::uint16_t max_height) noexcept
+      : detector_(detector), bits_(bits), features_(features), max_width_(max_width), max_height_(max_height) {}
+  // Errors: kInvalidArgument for an invalid image or detector threshold,
+  // kBufferTooSmall when bits or features are short of the sizes above.
+  [[nodiscard]] Status load(const ImageView& image, const ImageWindow& window) noexcept override;
+  const EdgeMap& map() const noexcept { return map_; }
+
+ private:
+  Detector detector_;
+  std::span<std::uint64_t> bits_;
+  std::span<RoiPoint> features_;
+  std::uint16_t max_width_, max_height_;
+  EdgeMap map_;
+};
+
+class EdgeCorrelationMeasure final : public ParticleMeasure {
+ public:
+  // The model points come from `table` (which must outlive the measure);
+  // stride >= 1, tolerance 0..3 pixels.
+  EdgeCorrelationMeasure(const TableView& table, const EdgeMapLoader& edges, std::uint32_t stride,
+                         std::uint32_t tolerance) noexcept;
+  [[nodiscard]] Status prepare(const ImageView&, const Pose&) noexcept override { return Status::kOk; }
+  void weigh(std::span<Particle> particles) noexcept override;
+  float score(const Pose& pose) noexcept override;
+  std::uint32_t reach_px() const noexcept override;
+
+ private:
+  const TableView& table_;
+  const EdgeMapLoader& edges_;
+  std::uint32_t stride_;
+  std::uint32_t tolerance_;
+  std::uint32_t reach_ = 0;
+};
+
+class StencilVoteMeasure final : public ParticleMeasure {
+ public:
+  // scratch: as track_step's (tracker.hpp). The table must outlive the measure.
+  StencilVoteMeasure(const TableView& table, const Detector& detector, TrackerScratch scratch) noexcept
+      : table_(table), detector_(detector), scratch_(scratch) {}
+  // Votes the ROI at `predicted`. Errors: track_step's.
+  [[nodiscard]] Status prepare(const ImageView& image, const Pose& predicted) noexcept override;
+  void weigh(std::span<Particle> particles) noexcept override;
+  float score(const Pose& pose) noexcept override;
+  std::uint32_t reach_px() const noexcept override { return 0; }
+  // The cell whose motion from this frame's prediction contains `pose`, or kNoCell.
+  std::uint32_t cell_of(const Pose& pose) const noexcept;
+  const PreparedFrame& frame() const noexcept { return frame_; }
+  std::uint64_t votes() const noexcept { return tally_.votes; }
+
+ private:
+  const TableView& table_;
+  Detector detector_;
+  TrackerScratch scratch_;
+  PreparedFrame frame_;
+  VoteTally tally_;
+  Pose predicted_;
+  SinCos rotation_;
+  bool prepared_ = false;
+};
+
+}  // namespace gabarit

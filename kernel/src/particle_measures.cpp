@@ -1,0 +1,192 @@
+#include "gabarit/particle_measures.hpp"
+
+#include "gabarit/assert.hpp"
+#include "gabarit/deterministic_math.hpp"
+#include "gabarit/dense_voter.hpp"
+#include "gabarit/features.hpp"
+
+namespace gabarit {
+
+bool EdgeMap::near(std::int32_t x, std::int32_t y, std::uint32_t t) const noexcept {
+  if (t == 0) return at(x, y);
+  const auto ti = static_cast<std::int32_t>(t);
+  // Columns c0..c1 of the window (clipped), rows r0..r1.
+  std::int32_t c0 = x - ti - window.x0, c1 = x + ti - window.x0;
+  std::int32_t r0 = y - ti - window.y0, r1 = y + ti - window.y0;
+  if (c0 < 0) c0 = 0;
+  if (r0 < 0) r0 = 0;
+  if (c1 >= window.width) c1 = window.width - 1;
+  if (r1 >= window.height) r1 = window.height - 1;
+  if (c0 > c1 || r0 > r1) return false;
+  const auto w0 = static_cast<std::uint32_t>(c0) / 64, w1 = static_cast<std::uint32_t>(c1) / 64;
+  const std::uint32_t b0 = static_cast<std::uint32_t>(c0) & 63u, b1 = static_cast<std::uint32_t>(c1) & 63u;
+  // At most 7 columns: one word, or the tail of one and the head of the next.
+  const std::uint64_t head = ~std::uint64_t{0} << b0;
+  const std::uint64_t tail = b1 == 63 ? ~std::uint64_t{0} : (std::uint64_t{1} << (b1 + 1)) - 1;
+  for (std::int32_t r = r0; r <= r1; ++r) {
+    const std::uint64_t* row = bits.data() + static_cast<std::size_t>(r) * words_per_row;
+    if (w0 == w1) {
+      if ((row[w0] & head & tail) != 0) return true;
+    } else if ((row[w0] & head) != 0 || (row[w1] & tail) != 0) {
+      return true;
+    }
+  }
+  return false;
+}
+
+Status EdgeMapLoader::load(const ImageView& image, const ImageWindow& requested) noexcept {
+  if (!image.valid()) return Status::kInvalidArgument;
+  // Clip to the image, then to the bitmap's largest window around the request's centre.
+  std::int64_t x0 = requested.x0, y0 = requested.y0;
+  std::int64_t x1 = x0 + requested.width, y1 = y0 + requested.height;
+  if (x0 < 0) x0 = 0;
+  if (y0 < 0) y0 = 0;
+  if (x1 > image.width) x1 = image.width;
+  if (y1 > image.height) y1 = image.height;
+  if (x1 < x0) x1 = x0;
+  if (y1 < y0) y1 = y0;
+  if (x1 - x0 > max_width_) {
+    const std::int64_t cut = (x1 - x0 - max_width_) / 2;
+    x0 += cut, x1 = x0 + max_width_;
+  }
+  if (y1 - y0 > max_height_) {
+    const std::int64_t cut = (y1 - y0 - max_height_) / 2;
+    y0 += cut, y1 = y0 + max_height_;
+  }
+  ImageWindow window{static_cast<std::int32_t>(x0), static_cast<std::int32_t>(y0), static_cast<std::uint16_t>(x1 - x0),
+                     static_cast<std::uint16_t>(y1 - y0)};
+  const std::size_t words = edge_map_words(window.width, window.height);
+  if (bits_.size() < edge_map_words(max_width_, max_height_) || features_.size() < max_width_ || words > bits_.size())
+    return Status::kBufferTooSmall;
+  map_ = {};
+  map_.window = window;
+  map_.words_per_row = static_cast<std::uint32_t>((std::size_t{window.width} + 63) / 64);
+  for (std::size_t i = 0; i < words; ++i) bits_[i] = 0;
+  map_.bits = bits_.first(words);
+  if (window.width == 0 || window.height == 0) return Status::kOk;
+  // Detect in strips of as many rows as the feature scratch holds (the
+  // detectors read the image around a pixel, not the window, so strips give
+  // the features one window would).
+  const std::uint32_t strip_rows = static_cast<std::uint32_t>(features_.size() / window.width);
+  for (std::uint32_t r = 0; r < window.height; r += strip_rows) {
+    const std::uint32_t rows = window.height - r < strip_rows ? window.height - r : strip_rows;
+    const ImageWindow strip{window.x0, window.y0 + static_cast<std::int32_t>(r), window.width, static_cast<std::uint16_t>(rows)};
+    FeatureCount count;
+    GABARIT_TRY(extract_features(image, strip, detector_.kind, detector_.threshold, features_, count));
+    for (std::uint32_t i = 0; i < count.written; ++i) {
+      const RoiPoint p = features_[i];
+      bits_[std::size_t{r + p.row} * map_.words_per_row + p.col / 64u] |= std::uint64_t{1} << (p.col & 63u);
+    }
+    map_.features += count.written;
+    map_.dropped += count.dropped;
+  }
+  return Status::kOk;
+}
+
+namespace {
+
+// The first model point of `depth` (points are stored depth after depth).
+std::uint32_t first_point(const TableView& table, std::uint16_t depth) noexcept {
+  std::uint32_t first = 0;
+  for (std::uint16_t d = 0; d < depth; ++d) first += table.model_point_count(d);
+  return first;
+}
+
+}  // namespace
+
+float EdgeCorrelationMeasure::score(const Pose& pose) noexcept {
+  if (!pose_in_range(pose)) return 0.0f;
+  const std::uint16_t depth = pose.depth < table_.depth_count() ? pose.depth : static_cast<std::uint16_t>(table_.depth_count() - 1);
+  const std::uint32_t first = first_point(table_, depth), count = table_.model_point_count(depth);
+  if (count == 0) return 0.0f;
+  const EdgeMap& map = edges_.map();
+  const SinCos sc = sin_cos_deg(pose.theta_deg);
+  std::uint32_t hits = 0, taken = 0;
+  for (std::uint32_t k = 0; k < count; k += stride_) {
+    const ModelPoint m = table_.model_point(first + k);
+    const float mx = static_cast<float>(m.x), my = static_cast<float>(m.y);
+    const std::int32_t px = round_to_int(pose.x + (sc.cos * mx - sc.sin * my));
+    const std::int32_t py = round_to_int(pose.y + (sc.sin * mx + sc.cos * my));
+    hits += map.near(px, py, tolerance_) ? 1u : 0u;
+    ++taken;
+  }
+  return static_cast<float>(hits) / static_cast<float>(taken);
+}
+
+void EdgeCorrelationMeasure::weigh(std::span<Particle> particles) noexcept {
+  for (Particle& p : particles) p.weight = score(p.pose);
+}
+
+EdgeCorrelationMeasure::EdgeCorrelationMeasure(const TableView& table, const EdgeMapLoader& edges, std::uint32_t stride,
+                                               std::uint32_t tolerance) noexcept
+    : table_(table), edges_(edges), stride_(stride < 1 ? 1 : stride), tolerance_(tolerance > 3 ? 3 : tolerance) {
+  std::uint32_t reach = 0;
+  for (std::uint32_t i = 0; i < table_.model_point_count(); ++i) {
+    const ModelPoint m = table_.model_point(i);
+    const auto ax = static_cast<std::uint32_t>(m.x < 0 ? -m.x : m.x), ay = static_cast<std::uint32_t>(m.y < 0 ? -m.y : m.y);
+    if (ax + ay > reach) reach = ax + ay;  // the L1 norm bounds the rotated point's distance
+  }
+  reach_ = reach + tolerance_ + 1;
+}
+
+std::uint32_t EdgeCorrelationMeasure::reach_px() const noexcept { return reach_; }
+
+Status StencilVoteMeasure::prepare(const ImageView& image, const Pose& predicted) noexcept {
+  prepared_ = false;
+  GABARIT_TRY(prepare_frame(table_, detector_, image, predicted, scratch_, frame_));
+  GABARIT_TRY(clear_counters(table_, scratch_.counters));
+  const std::span<const RoiPoint> features = scratch_.features.first(frame_.features);
+  tally_ = {};
+  if (!scratch_.dense_masks.empty()) {
+    GABARIT_TRY(accumulate_votes_dense(table_, scratch_.dense_masks, features, scratch_.counters, scratch_.dense_scratch, tally_));
+  } else if (!scratch_.expanded_offsets.empty()) {
+    GABARIT_TRY(accumulate_votes_expanded(table_, scratch_.expanded_offsets, features, scratch_.counters, tally_));
+  } else {
+    GABARIT_TRY(accumulate_votes(table_, features, scratch_.counters, tally_));
+  }
+  predicted_ = predicted;
+  rotation_ = sin_cos_deg(predicted.theta_deg);
+  prepared_ = true;
+  return Status::kOk;
+}
+
+namespace {
+
+// The index of the cell of `a` whose centre is nearest v, or -1 outside the axis.
+std::int32_t axis_index(const Axis& a, float v) noexcept {
+  if (a.cells <= 1) {
+    const float d = v - a.min;
+    return d >= -0.5f && d <= 0.5f ? 0 : -1;
+  }
+  const float spacing = (a.max - a.min) / static_cast<float>(a.cells - 1);
+  const float f = (v - a.min) / spacing;
+  if (!(f > -0.5f && f < static_cast<float>(a.cells) - 0.5f)) return -1;
+  const std::int32_t i = round_to_int(f);
+  return i < 0 ? 0 : i >= static_cast<std::int32_t>(a.cells) ? static_cast<std::int32_t>(a.cells) - 1 : i;
+}
+
+}  // namespace
+
+std::uint32_t StencilVoteMeasure::cell_of(const Pose& pose) const noexcept {
+  if (!prepared_ || !pose_in_range(pose) || pose.depth >= table_.depth_count()) return kNoCell;
+  const float dx = pose.x - static_cast<float>(frame_.roi_centre_x), dy = pose.y - static_cast<float>(frame_.roi_centre_y);
+  const float tx = rotation_.cos * dx + rotation_.sin * dy, ty = -rotation_.sin * dx + rotation_.cos * dy;
+  const Axis ax = table_.axis_x(), ay = table_.axis_y(), at = table_.axis_theta();
+  const std::int32_t ix = axis_index(ax, tx), iy = axis_index(ay, ty), it = axis_index(at, pose.theta_deg - predicted_.theta_deg);
+  if (ix < 0 || iy < 0 || it < 0) return kNoCell;
+  return ((std::uint32_t{pose.depth} * at.cells + static_cast<std::uint32_t>(it)) * ay.cells + static_cast<std::uint32_t>(iy)) *
+             ax.cells +
+         static_cast<std::uint32_t>(ix);
+}
+
+float StencilVoteMeasure::score(const Pose& pose) noexcept {
+  const std::uint32_t cell = cell_of(pose);
+  if (cell == kNoCell) return 0.0f;
+  return normalised_score({cell, scratch_.counters[cell], table_.stencil_size(cell)});
+}
+
+void StencilVoteMeasure::weigh(std::span<Particle> particles) noexcept {
+  for (Particle& p : particles) p.weight = score(p.pose);
+}
+
+}  // namespace gabarit

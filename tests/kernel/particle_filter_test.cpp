@@ -1,0 +1,410 @@
+// The particle filter (thesis chapter 3): its generator, its O(n) sort, its
+// image loading and two measures, each improvement on its own, and whole
+// runs that track a moving model; the same seed gives the same bits.
+#include "gabarit/particle_filter.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <numeric>
+#include <vector>
+
+#include "gabarit/crc32.hpp"
+#include "gabarit/deterministic_math.hpp"
+#include "gabarit/particle_measures.hpp"
+#include "test_tables.hpp"
+
+namespace gabarit {
+namespace {
+
+using app::GrayImage;
+
+TEST(ParticleRng, IsSplitMix64AndItsNormalsHaveUnitVariance) {
+  ParticleRng a(7), b(7);
+  host::Rng reference(7);
+  for (int i = 0; i < 100; ++i) {
+    const std::uint64_t v = a.next();
+    EXPECT_EQ(v, reference.next_u64());
+    EXPECT_EQ(v, b.next());
+  }
+  double sum = 0, sum2 = 0;
+  const int n = 200000;
+  for (int i = 0; i < n; ++i) {
+    const float u = a.uniform();
+    ASSERT_GE(u, 0.0f);
+    ASSERT_LT(u, 1.0f);
+    const double g = a.normal();
+    ASSERT_LE(std::fabs(g), 3.47);
+    sum += g, sum2 += g * g;
+  }
+  EXPECT_NEAR(sum / n, 0.0, 0.01);
+  EXPECT_NEAR(sum2 / n, 1.0, 0.02);
+}
+
+TEST(ParticleSort, OrdersByWeightHeaviestFirstTiesByIndex) {
+  host::Rng rng(3);
+  for (const std::uint32_t n : {1u, 2u, 7u, 255u, 256u, 1000u, 4097u}) {
+    std::vector<Particle> ps(n);
+    for (std::uint32_t i = 0; i < n; ++i) ps[i].weight = static_cast<float>(rng.uniform_int(0, 20)) * 0.125f;  // many ties
+    if (n > 3) ps[1].weight = -0.0f, ps[2].weight = std::nanf("");  // both count as 0
+    std::vector<std::uint32_t> order(2 * n);
+    sort_by_weight(ps, order);
+    std::vector<std::uint32_t> expected(n);
+    std::iota(expected.begin(), expected.end(), 0u);
+    const auto w = [&](std::uint32_t i) { return ps[i].weight > 0.0f ? ps[i].weight : 0.0f; };
+    std::stable_sort(expected.begin(), expected.end(), [&](std::uint32_t a, std::uint32_t b) { return w(a) > w(b); });
+    ASSERT_EQ(std::vector<std::uint32_t>(order.begin(), order.begin() + n), expected) << "n " << n;
+  }
+}
+
+// A binary frame of a point model, and its table (x, y +-5 in 1-px cells, theta +-2 in 1-deg cells).
+struct Scene {
+  std::vector<host::Point> points;
+  std::vector<std::byte> bytes;
+  TableView table;
+  Scene() {
+    host::Rng rng(11);
+    points = testing::random_points(rng, 60, 20, 2.0);
+    bytes = testing::build(testing::point_model(points), "-5:5:11", "-5:5:11", "-2:2:5");
+    table = testing::open_table(bytes);
+  }
+  GrayImage frame(float x, float y, float theta, host::Rng* noise = nullptr, double p = 0.0) const {
+    GrayImage g = testing::draw_points(points, x, y, theta, 160);
+    if (noise != nullptr)
+      for (auto& v : g.pixels)
+        if (noise->bernoulli(p)) v = static_cast<std::uint8_t>(255 - v);
+    return g;
+  }
+};
+
+struct EdgeBuffers {
+  explicit EdgeBuffers(std::size_t feature_slots = 160) : bits(edge_map_words(160, 160)), features(feature_slots) {}
+  std::vector<std::uint64_t> bits;
+  std::vector<RoiPoint> features;
+  EdgeMapLoader loader(const Detector& d) { return EdgeMapLoader(d, bits, features, 160, 160); }
+};
+
+TEST(EdgeMapLoader, StripsGiveTheBitsOneWindowDoesAndNearLooksAround) {
+  const Scene s;
+  host::Rng noise(5);
+  const GrayImage g = s.frame(80, 80, 10, &noise, 0.05);
+  const Detector binary{table_format::DetectorKind::kBinary, 0};
+  EdgeBuffers one_strip(160 * 160), narrow(160);  // the whole window at once; one row per strip
+  EdgeMapLoader a = one_strip.loader(binary), b = narrow.loader(binary);
+  const ImageWindow w{-7, 3, 150, 170};  // clipped to the image
+  ASSERT_EQ(a.load(g.view(), w), Status::kOk);
+  ASSERT_EQ(b.load(g.view(), w), Status::kOk);
+  EXPECT_EQ(a.map().window.x0, 0);
+  EXPECT_EQ(a.map().window.height, 157);
+  ASSERT_EQ(a.map().features, b.map().features);
+  ASSERT_TRUE(std::equal(a.map().bits.begin(), a.map().bits.end(), b.map().bits.begin()));
+  std::uint32_t set = 0;
+  for (std::int32_t y = -2; y < 162; ++y)
+    for (std::int32_t x = -2; x < 162; ++x) {
+      const bool inside = x >= 0 && x < 143 && y >= 3 && y < 160;
+      const bool feature = inside && g.pixels[static_cast<std::size_t>(y) * 160 + static_cast<std::size_t>(x)] != 0;
+      ASSERT_EQ(a.map().at(x, y), feature) << x << "," << y;
+      set += feature;
+      bool around = false;
+      for (int j = -2; j <= 2; ++j)
+        for (int i = -2; i <= 2; ++i) around = around || a.map().at(x + i, y + j);
+      ASSERT_EQ(a.map().near(x, y, 2), around) << x << "," << y;
+    }
+  EXPECT_EQ(set, a.map().features);
+  // Too little scratch is refused, not truncated.
+  EdgeBuffers short_features(159);
+  EdgeMapLoader c = short_features.loader(binary);
+  EXPECT_EQ(c.load(g.view(), w), Status::kBufferTooSmall);
+}
+
+TEST(EdgeCorrelationMeasure, IsOneAtTheTruePoseAndFallsAway) {
+  const Scene s;
+  const GrayImage g = s.frame(81, 77, 12);
+  EdgeBuffers buffers;
+  EdgeMapLoader loader = buffers.loader({table_format::DetectorKind::kBinary, 0});
+  ASSERT_EQ(loader.load(g.view(), {0, 0, 160, 160}), Status::kOk);
+  EdgeCorrelationMeasure exact(s.table, loader, 1, 0), loose(s.table, loader, 2, 1);
+  EXPECT_FLOAT_EQ(exact.score({81, 77, 12, 0}), 1.0f);
+  EXPECT_FLOAT_EQ(loose.score({81, 77, 12, 0}), 1.0f);
+  EXPECT_LT(exact.score({84, 77, 12, 0}), 0.3f);
+  EXPECT_LT(exact.score({81, 77, 20, 0}), 0.5f);
+  EXPECT_GT(loose.score({82, 77, 12, 0}), 0.9f);  // one pixel off is within the tolerance
+  EXPECT_EQ(exact.score({1e30f, 0, 0, 0}), 0.0f);
+  EXPECT_GE(loose.reach_px(), 20u + 1u);
+}
+
+TEST(StencilVoteMeasure, CellOfInvertsPoseOfCellAndScoresAreTheVotes) {
+  const Scene s;
+  const GrayImage g = s.frame(82, 78, 8);
+  testing::TrackerTestScratch scratch(s.table), reference(s.table);
+  StencilVoteMeasure m(s.table, detector_of(s.table), scratch.view());
+  const Pose predicted{80.3f, 79.6f, 7.0f, 0};
+  ASSERT_EQ(m.prepare(g.view(), predicted), Status::kOk);
+  StepResult step;
+  ASSERT_EQ(track_step(s.table, g.view(), predicted, reference.view(), step), Status::kOk);
+  ASSERT_EQ(scratch.counters, reference.counters);
+  for (std::uint32_t cell = 0; cell < s.table.cell_count(); ++cell) {
+    const Pose p = pose_of_cell(s.table, cell, predicted, step.roi_centre_x, step.roi_centre_y);
+    ASSERT_EQ(m.cell_of(p), cell);
+    ASSERT_EQ(m.score(p), normalised_score({cell, reference.counters[cell], s.table.stencil_size(cell)}));
+  }
+  EXPECT_EQ(m.cell_of({predicted.x + 9, predicted.y, predicted.theta_deg, 0}), kNoCell);
+  EXPECT_EQ(m.cell_of({predicted.x, predicted.y, predicted.theta_deg + 4, 0}), kNoCell);
+  EXPECT_EQ(m.score({predicted.x, predicted.y, predicted.theta_deg, 1}), 0.0f);  // no such depth
+  EXPECT_FLOAT_EQ(m.score(step.pose), step.score);
+}
+
+// Runs a filter on the scene moving along a path; returns the CRC-32C of
+// every estimate's bits and the worst position error.
+struct RunResult {
+  std::uint32_t crc = 0;
+  float worst_px = 0, worst_deg = 0;
+  std::uint32_t tracking = 0;
+};
+enum class Which { kEdges, kStencil };
+RunResult run(const Scene& s, Which which, const ParticleFilterOptions& o, std::uint64_t seed, std::uint32_t particles, int frames = 40) {
+  EdgeBuffers buffers;
+  EdgeMapLoader loader = buffers.loader({table_format::DetectorKind::kBinary, 0});
+  EdgeCorrelationMeasure coarse(s.table, loader, 2, 1), fine(s.table, loader, 1, 1);
+  testing::TrackerTestScratch scratch(s.table);
+  StencilVoteMeasure stencil(s.table, detector_of(s.table), scratch.view());
+  ParticlePolicies policies;
+  policies.loader = &loader;
+  policies.measure = which == Which::kEdges ? static_cast<ParticleMeasure*>(&coarse) : &stencil;
+  policies.finer = &fine;
+  ParticleFilter filter(policies);
+  std::vector<Particle> cloud(particles), next(particles);
+  std::vector<std::uint32_t> order(2 * particles);
+  float x = 80, y = 80, theta = 0;
+  EXPECT_EQ(filter.start(o, {x, y, theta, 0}, 1, seed, {cloud, next, order}), Status::kOk);
+  host::Rng noise(seed + 100);
+  RunResult r;
+  std::uint32_t crc = 0;
+  for (int f = 0; f < frames; ++f) {
+    x += 1.5f * sin_cos_deg(11.459156f * static_cast<float>(f)).sin, y += 1.2f, theta += 0.5f;  // the kernel's sine: the same path everywhere
+    const GrayImage g = s.frame(x, y, theta, &noise, 0.03);
+    ParticleEstimate e;
+    EXPECT_EQ(filter.step(g.view(), e), Status::kOk);
+    const std::uint32_t bits[4] = {std::bit_cast<std::uint32_t>(e.pose.x), std::bit_cast<std::uint32_t>(e.pose.y),
+                                   std::bit_cast<std::uint32_t>(e.pose.theta_deg), e.pose.depth};
+    crc = crc32c_update(crc, std::as_bytes(std::span(bits)));
+    if (f >= 3) {  // the first frames converge
+      r.worst_px = std::max(r.worst_px, std::hypot(e.pose.x - x, e.pose.y - y));
+      r.worst_deg = std::max(r.worst_deg, std::fabs(e.pose.theta_deg - theta));
+    }
+    r.tracking += e.state == TrackState::kTracking;
+  }
+  r.crc = crc;
+  return r;
+}
+
+TEST(ParticleFilter, TracksAMovingModelWithEitherMeasure) {
+  const Scene s;
+  for (const Which w : {Which::kEdges, Which::kStencil}) {
+    const RunResult r = run(s, w, ParticleFilterOptions{}, 1, 500);
+    EXPECT_LT(r.worst_px, 2.0f) << (w == Which::kEdges ? "edges" : "stencil");
+    EXPECT_LT(r.worst_deg, 2.0f);
+    EXPECT_GE(r.tracking, 36u);
+  }
+}
+
+TEST(ParticleFilter, PlainCondensationTracksToo) {
+  const Scene s;
+  const RunResult r = run(s, Which::kEdges, plain_condensation(), 2, 1000);
+  EXPECT_LT(r.worst_px, 3.0f);
+}
+
+TEST(ParticleFilter, TheSameSeedGivesTheSameBitsAndAnotherSeedOthers) {
+  const Scene s;
+  const RunResult a = run(s, Which::kEdges, {}, 9, 300), b = run(s, Which::kEdges, {}, 9, 300), c = run(s, Which::kEdges, {}, 10, 300);
+  EXPECT_EQ(a.crc, b.crc);
+  EXPECT_NE(a.crc, c.crc);
+  // The same bits on every target (x86-64, aarch64, armhf, Cortex-M run this
+  // test): the digest of the estimates was measured on x86-64 and must not
+  // change on any of them.
+  const RunResult stencil = run(s, Which::kStencil, {}, 9, 300);
+  EXPECT_EQ(a.crc, 2293843887u) << "edges digest";
+  EXPECT_EQ(stencil.crc, 863543066u) << "stencil digest";
+}
+
+TEST(ParticleFilter, ClustersSeparatedParticlesIntoModesHeaviestFirst) {
+  ParticleFilterOptions o;
+  ParticleContext c;
+  c.options = &o;
+  std::vector<Particle> ps;
+  for (int i = 0; i < 30; ++i) ps.push_back({{10.0f + 0.1f * static_cast<float>(i % 5), 10.0f, 0.0f, 0}, 1.0f});
+  for (int i = 0; i < 10; ++i) ps.push_back({{50.0f, 50.0f + 0.2f * static_cast<float>(i % 3), 1.0f, 0}, 2.0f});
+  ps.push_back({{10.0f, 10.0f, 0.0f, 1}, 0.5f});  // another depth: its own mode
+  std::vector<std::uint32_t> order(2 * ps.size());
+  ParticleMode modes[kMaxParticleModes];
+  ParticleAnalysisResult r;
+  ModeAnalysis analysis;
+  analysis.analyse(ps, order, c, nullptr, modes, r);
+  ASSERT_EQ(r.modes, 3u);
+  EXPECT_EQ(modes[0].particles, 30u);  // weight 30 of 50.5
+  EXPECT_NEAR(modes[0].weight, 30.0 / 50.5, 1e-6);
+  EXPECT_NEAR(modes[0].pose.x, 10.2, 1e-4);
+  EXPECT_EQ(modes[1].particles, 10u);
+  EXPECT_NEAR(modes[1].pose.theta_deg, 1.0, 1e-6);
+  EXPECT_EQ(modes[2].pose.depth, 1);
+  EXPECT_EQ(r.best, 0u);
+  // At most max_modes: the rest belong to none.
+  o.max_modes = 1;
+  analysis.analyse(ps, order, c, nullptr, modes, r);
+  EXPECT_EQ(r.modes, 1u);
+  EXPECT_EQ(modes[0].particles, 10u);  // the heaviest particle seeds the one mode
+}
+
+// A finer measure that prefers one place.
+class PrefersX final : public ParticleMeasure {
+ public:
+  explicit PrefersX(float x) : x_(x) {}
+  Status prepare(const ImageView&, const Pose&) noexcept override { return Status::kOk; }
+  void weigh(std::span<Particle> ps) noexcept override {
+    for (Particle& p : ps) p.weight = score(p.pose);
+  }
+  float score(const Pose& p) noexcept override { return std::fabs(p.x - x_) < 1 ? 0.9f : 0.2f; }
+  std::uint32_t reach_px() const noexcept override { return 0; }
+
+ private:
+  float x_;
+};
+
+TEST(ParticleFilter, DisambiguationAndModeFilteringChooseTheRightMode) {
+  ParticleFilterOptions o;
+  ParticleContext c;
+  c.options = &o;
+  std::vector<Particle> ps;
+  for (int i = 0; i < 20; ++i) ps.push_back({{10, 10, 0, 0}, 1.0f});  // heaviest
+  for (int i = 0; i < 10; ++i) ps.push_back({{40, 10, 0, 0}, 1.0f});
+  std::vector<std::uint32_t> order(2 * ps.size());
+  ParticleMode modes[kMaxParticleModes];
+  ParticleAnalysisResult r;
+  ModeAnalysis analysis;
+  PrefersX finer(40);
+  c.predicted = {38, 10, 0, 0};
+  o.mode_filter = false;
+  analysis.analyse(ps, order, c, &finer, modes, r);
+  EXPECT_EQ(modes[r.best].pose.x, 40.0f) << "the finer measure overrules the weights";
+  o.disambiguate = false;
+  analysis.analyse(ps, order, c, &finer, modes, r);
+  EXPECT_EQ(modes[r.chosen].pose.x, 10.0f) << "without it, the heaviest";
+  o.mode_filter = true;
+  analysis.analyse(ps, order, c, &finer, modes, r);
+  EXPECT_EQ(modes[r.chosen].pose.x, 40.0f) << "mode filtering keeps the mode near the prediction";
+  EXPECT_FALSE(r.held);
+  c.predicted = {100, 100, 0, 0};
+  analysis.analyse(ps, order, c, &finer, modes, r);
+  EXPECT_TRUE(r.held) << "no mode near the prediction: held";
+  c.held_frames = o.mode_filter_patience;
+  analysis.analyse(ps, order, c, &finer, modes, r);
+  EXPECT_FALSE(r.held) << "after the patience, the best mode anyway";
+  EXPECT_EQ(modes[r.chosen].pose.x, 10.0f);
+  c.held_frames = 0;
+  c.unconfident_frames = 40;  // the distance grows
+  analysis.analyse(ps, order, c, &finer, modes, r);
+  EXPECT_FALSE(r.held);
+}
+
+TEST(ParticleFilter, KinematicOverWeightingFavoursThePredictionByConfidence) {
+  ParticleFilterOptions o;
+  ParticleContext c;
+  c.options = &o;
+  c.predicted = {0, 0, 0, 0};
+  std::vector<Particle> ps = {{{0, 0, 0, 0}, 1.0f}, {{10, 0, 0, 0}, 1.0f}};
+  KinematicCompensation k;
+  c.confidence = 0.0f;
+  k.compensate(ps, c);
+  EXPECT_EQ(ps[0].weight, 1.0f);
+  c.confidence = 1.0f;
+  k.compensate(ps, c);
+  EXPECT_NEAR(ps[0].weight, 2.0f, 1e-4);
+  EXPECT_NEAR(ps[1].weight, 1.0f, 1e-4);
+  o.kinematic_weighting = false;
+  k.compensate(ps, c);
+  EXPECT_NEAR(ps[0].weight, 2.0f, 1e-4);
+}
+
+TEST(ParticleFilter, PartialReinitialisationDrawsItsShareAroundThePose) {
+  ParticleFilterOptions o;
+  ParticleContext c;
+  c.options = &o;
+  c.reinit_centre = {200, 200, 5, 0};
+  c.reinit_fraction = 0.25f;
+  std::vector<Particle> cloud(400, Particle{{10, 10, 0, 0}, 1.0f}), next(400);
+  DefaultPropagation prop;
+  ParticleRng rng(1);
+  prop.propagate(cloud, next, c, rng);
+  const auto near_reinit = std::count_if(next.begin(), next.end(), [](const Particle& p) { return std::fabs(p.pose.x - 200) < 20; });
+  EXPECT_EQ(near_reinit, 100);
+  // Narrowing: a smaller spread, a tighter cloud.
+  c.reinit_fraction = 0;
+  const auto spread = [&](float s) {
+    c.spread = s;
+    prop.propagate(cloud, next, c, rng);
+    double v = 0;
+    for (const Particle& p : next) v += (p.pose.x - 10) * (p.pose.x - 10);
+    return std::sqrt(v / static_cast<double>(next.size()));
+  };
+  EXPECT_NEAR(spread(1.0f), o.sigma_px, 0.25);
+  EXPECT_NEAR(spread(0.4f), 0.4 * o.sigma_px, 0.1);
+}
+
+TEST(ParticleFilter, RecoversAfterTheTargetJumpsByScatteringAndMeasuring) {
+  const Scene s;
+  EdgeBuffers buffers;
+  EdgeMapLoader loader = buffers.loader({table_format::DetectorKind::kBinary, 0});
+  EdgeCorrelationMeasure coarse(s.table, loader, 2, 2), fine(s.table, loader, 1, 1);
+  ParticlePolicies policies{&loader, &coarse, &fine};
+  ParticleFilter filter(policies);
+  std::vector<Particle> cloud(2000), next(2000);
+  std::vector<std::uint32_t> order(4000);
+  ASSERT_EQ(filter.start({}, {50, 50, 0, 0}, 1, 4, {cloud, next, order}), Status::kOk);
+  ParticleEstimate e;
+  ASSERT_EQ(filter.step(s.frame(50, 50, 0).view(), e), Status::kOk);
+  ASSERT_EQ(e.state, TrackState::kTracking);
+  // The target is now elsewhere; a search over the frame finds it within a few frames.
+  int found = -1;
+  for (int f = 0; f < 10 && found < 0; ++f) {
+    if (f == 0) {
+      ASSERT_EQ(filter.scatter(30, 130, 30, 130, -2, 2), Status::kOk);
+    }
+    ASSERT_EQ(filter.step(s.frame(105, 95, 1).view(), e), Status::kOk);
+    if (std::hypot(e.pose.x - 105, e.pose.y - 95) < 2 && e.state == TrackState::kTracking) found = f;
+  }
+  EXPECT_GE(found, 0);
+}
+
+TEST(ParticleFilter, BadArgumentsAreRefused) {
+  const Scene s;
+  EdgeBuffers buffers;
+  EdgeMapLoader loader = buffers.loader({table_format::DetectorKind::kBinary, 0});
+  EdgeCorrelationMeasure m(s.table, loader, 1, 0);
+  std::vector<Particle> cloud(10), next(10);
+  std::vector<std::uint32_t> order(20);
+  ParticleFilter none(ParticlePolicies{});
+  EXPECT_EQ(none.start({}, {}, 1, 1, {cloud, next, order}), Status::kInvalidArgument);
+  ParticleFilter f(ParticlePolicies{&loader, &m});
+  ParticleEstimate e;
+  EXPECT_EQ(f.step(s.frame(80, 80, 0).view(), e), Status::kInvalidArgument) << "before start";
+  ParticleFilterOptions bad;
+  bad.sharpness = 0;
+  EXPECT_EQ(f.start(bad, {}, 1, 1, {cloud, next, order}), Status::kInvalidArgument);
+  bad = {};
+  bad.lost_ratio = 0.9f;  // above high_ratio
+  EXPECT_EQ(f.start(bad, {}, 1, 1, {cloud, next, order}), Status::kInvalidArgument);
+  EXPECT_EQ(f.start({}, {0, 0, 0, 1}, 1, 1, {cloud, next, order}), Status::kInvalidArgument) << "depth";
+  EXPECT_EQ(f.start({}, {std::nanf(""), 0, 0, 0}, 1, 1, {cloud, next, order}), Status::kInvalidArgument);
+  EXPECT_EQ(f.start({}, {}, 1, 1, {{}, next, order}), Status::kInvalidArgument) << "no particles";
+  EXPECT_EQ(f.start({}, {}, 1, 1, {cloud, std::span(next).first(9), order}), Status::kBufferTooSmall);
+  EXPECT_EQ(f.start({}, {}, 1, 1, {cloud, next, std::span(order).first(19)}), Status::kBufferTooSmall);
+  ASSERT_EQ(f.start({}, {80, 80, 0, 0}, 1, 1, {cloud, next, order}), Status::kOk);
+  EXPECT_EQ(f.step(ImageView{}, e), Status::kInvalidArgument);
+  EXPECT_EQ(f.scatter(5, 4, 0, 1, 0, 1), Status::kInvalidArgument);
+  EXPECT_EQ(f.scatter(0, 1, 0, std::nanf(""), 0, 1), Status::kInvalidArgument);
+}
+
+}  // namespace
+}  // namespace gabarit
