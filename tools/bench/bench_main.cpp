@@ -27,6 +27,7 @@
 #include "decimation_study.hpp"
 #include "experiments.hpp"
 #include "microscope.hpp"
+#include "pipette.hpp"
 #include "suite.hpp"
 #include "gabarit/app/error.hpp"
 #include "gabarit/host/thesis_shapes.hpp"
@@ -82,6 +83,8 @@ struct Options {
   std::string regression_csv;
   bool microscope = false;
   bool suite = false;
+  bool pipette = false;
+  std::uint32_t particles = 1000;
   bool decimation = false;
   std::uint32_t scenes = 0;
   bool no_peer = false;
@@ -369,6 +372,7 @@ constexpr const char* kHelp =
     "       gabarit bench --microscope [--quick] [--out DIR]\n"
     "       gabarit bench --suite [--quick] [--out DIR] [--scenes N] [--frames N] [--no-peer]\n"
     "       gabarit bench --decimation [--quick] [--out DIR] [--threads N]\n"
+    "       gabarit bench --pipette [--quick] [--out DIR] [--frames N] [--particles N]\n"
     "       gabarit bench --regression-csv FILE\n\n"
     "Re-measures the thesis's synthetic experiments (section 6.2) in one run: Table 6.1 timings against\n"
     "OpenCV's matchTemplate, the wrong-frame grid over noise x references kept (Figs. 6.16-6.19), the\n"
@@ -390,6 +394,11 @@ constexpr const char* kHelp =
     "                        policy x 11 keep ratios x 26 noise levels, one-step trials and continuous\n"
     "                        sequences (500/800 frames), tuning and held-out shapes, bytes and us/frame;\n"
     "                        writes DIR/decimation.md (quick: 6 noise levels, 4 keeps, 120 frames)\n"
+    "  --pipette             the thesis's section 6.4 re-run (docs/particle-filter.md): the stencil tracker\n"
+    "                        (custom edges and Canny, without and with the motion model) against the\n"
+    "                        particle filter on the glass-pipette scenes; Fig. 6.60's tip-error buckets and\n"
+    "                        Fig. 6.61's timings per half; writes DIR/pipette.md (quick: 4 scenes of 80 frames)\n"
+    "  --particles N         --pipette: particles (default 1000)\n"
     "  --regression-csv F    write the regression test's small grid to F and exit\n"
     "  --help                show this help\n";
 
@@ -430,6 +439,10 @@ int main(int argc, char** argv) {
         o.microscope = true;
       } else if (a == "--suite") {
         o.suite = true;
+      } else if (a == "--pipette") {
+        o.pipette = true;
+      } else if (a == "--particles") {
+        o.particles = static_cast<std::uint32_t>(count(1, 1000000));
       } else if (a == "--decimation") {
         o.decimation = true;
       } else if (a == "--scenes") {
@@ -443,7 +456,9 @@ int main(int argc, char** argv) {
         return 2;
       }
     }
-    if (o.microscope + o.suite + o.decimation > 1) throw gabarit::app::Error("give one of --microscope, --suite and --decimation");
+    if (o.microscope + o.suite + o.decimation + o.pipette > 1)
+      throw gabarit::app::Error("give one of --microscope, --suite, --decimation and --pipette");
+    if (o.pipette) return run_pipette({o.out, o.quick, static_cast<std::uint32_t>(o.grid_frames), o.particles});
     if (o.decimation) return run_decimation_study({o.out, o.quick, o.threads});
     if ((o.scenes || o.no_peer) && !o.suite) throw gabarit::app::Error("--scenes and --no-peer apply to --suite");
     if (o.microscope) return run_microscope(o.out, o.quick);

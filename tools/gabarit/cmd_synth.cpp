@@ -21,7 +21,7 @@ E scene_choice(const app::Args& args, const char* option, E fallback, const char
   return out;
 }
 
-constexpr const char* kObjects = "microscope, cog, coin, horse, pipette, cat, astronaut, cup or large";
+constexpr const char* kObjects = "microscope, cog, coin, horse, pipette, cat, astronaut, cup, large or glass-pipette";
 
 int synth_scene(const app::Args& args) {
   for (const char* shape_only : {"--points", "--max-step", "--noise"})
@@ -101,7 +101,7 @@ int synth(const std::vector<std::string>& argv) {
             {{"--shape", "SRC", "random | curve (thesis ~194 points) | watch (~2800 edge points of a Debian\n"
               "                          photograph) | photo:FILE.pgm | points CSV (x,y relative to the reference)"},
              {"--scene", "OBJECT", "the grayscale 4-DOF scene instead of a point shape: microscope (the cog over\n"
-              "                          gravel), cog, coin, horse, pipette, cat, astronaut, cup, large"},
+              "                          gravel), cog, coin, horse, pipette, cat, astronaut, cup, large, glass-pipette"},
              {"--background", "NAME", "--scene: gravel (default), grass, brick, moon, page, smooth"},
              {"--motion", "NAME", "--scene: smooth (default), walk (velocity random walk, reversing at the margins),\n"
               "                          stopgo, spin (~1.2 deg/frame), sweep (depth steps every 6 frames);\n"

@@ -1,6 +1,7 @@
 // gabarit track
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <optional>
 #include <sstream>
 
@@ -10,19 +11,21 @@
 #include "gabarit/app/image_io.hpp"
 #include "gabarit/app/files.hpp"
 #include "gabarit/app/scratch.hpp"
+#include "gabarit/host/particle_run.hpp"
 #include "gabarit/host/tracking_run.hpp"
 
 namespace gabarit::cli {
 
 int track(const std::vector<std::string>& argv) {
-  app::Args args("track", "--table T --frames SEQ --init X,Y[,THETA[,DEPTH]] [--plain] [-o POSES.csv] [--stats STATS.json]",
+  app::Args args("track", "--table T --frames SEQ --init X,Y[,THETA[,DEPTH]] [--plain | --tracker particle] [-o POSES.csv] [--stats STATS.json]",
             "Tracks the table's model through a sequence (a Y4M file, Cmono or 4:2:0, luma used; or a directory of\n"
             "PGM frames), streamed frame by frame. Writes frame,x,y,theta_deg,depth,votes,score,status per frame\n"
             "(to stdout without -o).\n"
             "By default the tracking session runs (docs/tracking.md): the motion filter (a Kalman filter placing\n"
             "the ROI, gating candidates and grading confidence), sub-cell refinement, recovery once lost, and depth\n"
             "and angle by intensity with the focus stack the table carries (tables built from images). --plain\n"
-            "runs the thesis's loop instead: each frame's best cell, nothing added.",
+            "runs the thesis's loop instead: each frame's best cell, nothing added. --tracker particle runs the\n"
+            "thesis's other tracker, its particle filter (chapter 3), on the table's model points.",
             {{"--table", "T", "table file", false, true},
              {"--frames", "SEQ", "Y4M file or directory of .pgm frames", false, true},
              {"--init", "X,Y[,THETA[,DEPTH]]", "pose before the first frame (image position of the reference point)", false, true},
@@ -49,12 +52,33 @@ int track(const std::vector<std::string>& argv) {
                                                   "frame's depth (and the reported angle) by intensity (normalised\n"
                                                   "cross-correlation) at the tracked pose"},
              {"--no-focus-stack", "", "ignore the table's model images: depth from the winning stencils only"},
+             {"--tracker", "stencil|particle", "stencil (default): the stencil session above; particle: the thesis's\n"
+              "                          particle filter (chapter 3, docs/particle-filter.md) with the table's model"},
+             {"--particles", "N", "--tracker particle: particles, 1..1000000 (default 1000)"},
+             {"--seed", "S", "--tracker particle: the generator's seed (default 1); same seed, same output"},
+             {"--measure", "edges|stencil", "--tracker particle: edge correlation over the table's model points\n"
+              "                          (default), or the stencil vote of each particle's cell"},
+             {"--edge-stride", "N", "--measure edges: every N-th model point, 1..64 (default 2)"},
+             {"--edge-tolerance", "PX", "--measure edges: a point within PX pixels of an edge counts, 0..3 (default 1)"},
+             {"--without", "LIST", "--tracker particle: improvements to switch off, comma-separated: modes,\n"
+              "                          disambiguation, narrowing, kinematics, reinit, mode-filter, velocity;\n"
+              "                          all: plain CONDENSATION"},
              {"-o", "POSES.csv", "pose output (default stdout)"},
              {"--stats", "STATS.json", "per-frame timing and vote statistics"}});
   if (!args.parse(argv)) return 0;
   const app::TableFile table_file(args.get("--table"));
   const TableView& table = table_file.view();
   const Pose pose = app::parse_init_pose(args.get("--init"), table, "--init");
+  const std::string tracker = args.get_or("--tracker", "stencil");
+  if (tracker != "stencil" && tracker != "particle") throw app::UsageError("--tracker '" + tracker + "': want stencil or particle");
+  const bool particle = tracker == "particle";
+  for (const char* option : {"--particles", "--seed", "--measure", "--without", "--edge-stride", "--edge-tolerance"})
+    if (!particle && args.has(option)) throw app::UsageError(std::string(option) + " applies to --tracker particle");
+  if (particle) {
+    for (const char* option : {"--plain", "--motion-filter", "--refine", "--recover", "--subcell", "--coarse", "--search-budget",
+                               "--screen-stride", "--search-interval", "--threads", "--focus-stack", "--no-focus-stack"})
+      if (args.has(option)) throw app::UsageError(std::string(option) + " applies to the stencil tracker, not --tracker particle");
+  }
   const app::VoterChoice voter = app::parse_voter(args.get_or("--voter", "auto"), "--voter");
   host::TrackingOptions options;
   options.voter = voter;
@@ -124,7 +148,7 @@ int track(const std::vector<std::string>& argv) {
   double features = 0, votes = 0;
   std::uint64_t dropped = 0;
   std::size_t lost = 0, uncertain = 0;
-  host::run_tracking(table, *frames, pose, options, [&](const app::TrackRow& row) {
+  const auto on_row = [&](const app::TrackRow& row) {
     rows += app::pose_csv_row(row);
     rows += '\n';
     emit(false);
@@ -134,7 +158,26 @@ int track(const std::vector<std::string>& argv) {
     dropped += row.step.features_dropped;
     lost += row.step.state == TrackState::kLost;
     uncertain += row.step.state == TrackState::kUncertain;
-  });
+  };
+  if (particle) {
+    host::ParticleRunOptions po;
+    po.particles = static_cast<std::uint32_t>(args.integer("--particles", 1000, 1, 1000000));
+    po.seed = static_cast<std::uint64_t>(args.integer("--seed", 1, 0, std::numeric_limits<std::int64_t>::max()));
+    po.detector = options.detector;
+    po.voter = voter;
+    if (const std::string m = args.get_or("--measure", "edges"); m == "stencil") {
+      po.measure = host::ParticleMeasureKind::kStencil;
+      po.finer = false;  // one vote per frame and no edge map: modes ranked by weight, confidence from the vote
+    } else if (m != "edges") {
+      throw app::UsageError("--measure '" + m + "': want edges or stencil");
+    }
+    po.edge_stride = static_cast<std::uint32_t>(args.integer("--edge-stride", 2, 1, 64));
+    po.edge_tolerance = static_cast<std::uint32_t>(args.integer("--edge-tolerance", 1, 0, 3));
+    if (args.has("--without")) host::switch_off_improvements(args.get("--without"), po.filter, "--without");
+    host::run_particle_tracking(table, *frames, pose, po, on_row);
+  } else {
+    host::run_tracking(table, *frames, pose, options, on_row);
+  }
   emit(true);
   if (file_out) file_out->commit();
   if (!file_out && (std::fflush(stdout) != 0 || std::ferror(stdout))) throw app::Error("pose output (stdout): write failed");

@@ -77,6 +77,10 @@ struct ObjectImage {
   int half = 0;
   Plane grey{1, 1};
   Plane alpha{1, 1};
+  // An object whose look changes with the illumination (the glass pipette):
+  // its other look; frames blend the two (appearance_at).
+  bool changes_look = false;
+  Plane other_grey{1, 1};
 };
 
 double coverage(double signed_distance) { return std::clamp(signed_distance + 0.5, 0.0, 1.0); }
@@ -146,6 +150,37 @@ ObjectImage make_object(SceneObject which) {
         for (int x = 0; x < o.grey.w; ++x) {
           const double d = half_width(x - o.half) - std::fabs(y - o.half);
           o.grey.at(x, y) = 215 - 150 * std::exp(-0.5 * (d - 1) * (d - 1));
+        }
+      break;
+    }
+    case SceneObject::kGlassPipette: {
+      // Half-width 8 px at the open end (x = -90) to 3 px at the closed tip
+      // (x = +90, rounded). Mostly transparent: the wall (~1.5 px) is dense,
+      // the bore lets 80% of the background through and brightens it a
+      // little (the lens). This is the high-contrast look; other_grey is the
+      // low-contrast one (a paler wall, a dimmer bore), and frames blend the two.
+      begin(90);
+      const double length = 90;
+      const auto half_width = [&](double x) { return 8.0 - 5.0 * (std::clamp(x, -length, length) + length) / (2 * length); };
+      const auto inside = [&](double x, double y) {  // signed distance to the wall, > 0 inside
+        const double tip = length - half_width(length);
+        if (x <= tip) return std::min(half_width(x) - std::fabs(y), x + length);
+        return half_width(length) - std::hypot(x - tip, y);
+      };
+      for (int y = 0; y < o.alpha.h; ++y)
+        for (int x = 0; x < o.alpha.w; ++x) {
+          const double d = inside(x - o.half, y - o.half);
+          const double wall = std::exp(-0.5 * (d - 1.0) * (d - 1.0));
+          o.alpha.at(x, y) = coverage(d) * (0.2 + 0.75 * wall);
+          o.grey.at(x, y) = 40 + 170 * (1 - wall);  // dark wall, bright bore
+        }
+      o.changes_look = true;
+      o.other_grey = o.grey;
+      for (int y = 0; y < o.alpha.h; ++y)
+        for (int x = 0; x < o.alpha.w; ++x) {
+          const double d = inside(x - o.half, y - o.half);
+          const double wall = std::exp(-0.5 * (d - 1.0) * (d - 1.0));
+          o.other_grey.at(x, y) = 95 * wall + 150 * (1 - wall);  // lit from the side: a paler wall, a dimmer bore
         }
       break;
     }
@@ -289,6 +324,7 @@ const char* name_of(SceneObject v) noexcept {
     case SceneObject::kCoin: return "coin";
     case SceneObject::kHorse: return "horse";
     case SceneObject::kPipette: return "pipette";
+    case SceneObject::kGlassPipette: return "glass-pipette";
     case SceneObject::kCat: return "cat";
     case SceneObject::kAstronaut: return "astronaut";
     case SceneObject::kCup: return "cup";
@@ -332,7 +368,7 @@ const char* name_of(FocusStackKind v) noexcept { return v == FocusStackKind::kTi
 
 bool parse_scene_name(const std::string& s, SceneObject& out) {
   using O = SceneObject;
-  return parse_from(s, out, std::array{O::kCog, O::kCoin, O::kHorse, O::kPipette, O::kCat, O::kAstronaut, O::kCup, O::kLarge});
+  return parse_from(s, out, std::array{O::kCog, O::kCoin, O::kHorse, O::kPipette, O::kCat, O::kAstronaut, O::kCup, O::kLarge, O::kGlassPipette});
 }
 bool parse_scene_name(const std::string& s, SceneBackground& out) {
   using B = SceneBackground;
@@ -354,6 +390,7 @@ void default_scene_size(SceneObject object, std::uint32_t& width, std::uint32_t&
   switch (object) {
     case SceneObject::kLarge: width = 704, height = 528; return;
     case SceneObject::kPipette: width = 640, height = 480; return;
+    case SceneObject::kGlassPipette: width = 640, height = 480; return;
     case SceneObject::kHorse: case SceneObject::kCup: width = 512, height = 384; return;
     default: width = 384, height = 288; return;
   }
@@ -386,6 +423,25 @@ SceneOptions suite_scene(std::uint32_t index, std::uint32_t frames) {
   return o;
 }
 
+SceneOptions pipette_scene(std::uint32_t index, std::uint32_t frames) {
+  SceneOptions o;
+  o.seed = 1001 + index;
+  o.frames = frames;
+  o.object = SceneObject::kGlassPipette;
+  o.width = o.height = 0;
+  static constexpr SceneBackground kBackgrounds[4] = {SceneBackground::kGravel, SceneBackground::kGrass, SceneBackground::kPage,
+                                                      SceneBackground::kMoon};
+  static constexpr SceneMotion kMotions[4] = {SceneMotion::kSmooth, SceneMotion::kWalk, SceneMotion::kStopGo, SceneMotion::kSweep};
+  // The held-out half pairs each background with another motion and side.
+  o.background = kBackgrounds[index % 4];
+  o.motion = kMotions[(index + index / 4) % 4];
+  o.occlusion_side = static_cast<OcclusionSide>(1 + (index + 2 * (index / 4)) % 5);
+  o.occlusion_start = 60 + (index * 13) % 60;
+  o.occlusion_frames = 12;
+  o.depths = 1;
+  return o;
+}
+
 SceneSummary write_scene_sequence(const SceneOptions& options, const std::string& dir) {
   SceneOptions o = options;
   if (o.width == 0 && o.height == 0) default_scene_size(o.object, o.width, o.height);
@@ -401,12 +457,25 @@ SceneSummary write_scene_sequence(const SceneOptions& options, const std::string
   const Plane brick = photo("brick");
   const Plane background = background_of(o.background, static_cast<int>(o.width), static_cast<int>(o.height));
 
-  std::vector<Layer> stack;
+  std::vector<Layer> stack, other_stack;
+  ObjectImage other = object;
+  other.grey = object.other_grey;
+  // The look at frame f of an object that changes it: the two looks blended,
+  // half and half at frame 0 (and in the model images).
+  const auto look_at = [&](std::uint32_t f, std::size_t n) -> Layer {
+    if (!object.changes_look) return stack[n];
+    const double w = 0.5 + 0.5 * std::sin(2 * kPi * f / 90.0);
+    Layer l = stack[n];
+    for (std::size_t i = 0; i < l.premultiplied.v.size(); ++i)
+      l.premultiplied.v[i] = (1 - w) * stack[n].premultiplied.v[i] + w * other_stack[n].premultiplied.v[i];
+    return l;
+  };
   const int model_side = patch + 16;
   for (int n = 0; n < o.depths; ++n) {
     stack.push_back(object_at_depth(object, n, o.depths, o.stack));
+    if (object.changes_look) other_stack.push_back(object_at_depth(other, n, o.depths, o.stack));
     Plane model(model_side, model_side, 128.0);
-    composite(model, stack.back(), model_side / 2, model_side / 2, 0, 1.0);
+    composite(model, look_at(0, static_cast<std::size_t>(n)), model_side / 2, model_side / 2, 0, 1.0);
     char name[32];
     std::snprintf(name, sizeof name, "model_%02d.pgm", n);
     write_plane_pgm((std::filesystem::path(dir) / name).string(), model);
@@ -500,7 +569,7 @@ SceneSummary write_scene_sequence(const SceneOptions& options, const std::string
     Plane frame = background;
     for (double& v : frame.v) v *= gain;
     Plane cover(frame.w, frame.h);
-    const Layer& layer = stack[static_cast<std::size_t>(p.depth)];
+    const Layer layer = look_at(f, static_cast<std::size_t>(p.depth));
     const bool blurred = o.blur_every > 0 && f > 0 && f % o.blur_every == 0;
     if (blurred) {
       // Motion blur: the object averaged over 7 instants of the last frame interval.

@@ -40,6 +40,12 @@ enum class SceneObject : std::uint8_t {
   kAstronaut,  // astronaut.png's helmet and face in a disk, ~60 px
   kCup,        // coffee.png's cup and saucer in an ellipse
   kLarge,      // camera.png at full scale in a rounded square ~200 px wide
+  // A glass micro-pipette (thesis 6.4), 180 px long: transparent (the
+  // background shows through it), a closed tapered tip, a wall whose
+  // contrast swings from strong to weak with the illumination (a period of
+  // 90 frames), every cross-section alike. Not in the 32-scene suite: the
+  // pipette scenes (pipette_scene) are its own.
+  kGlassPipette,
 };
 enum class SceneBackground : std::uint8_t { kGravel, kGrass, kBrick, kMoon, kPage, kSmooth };
 enum class SceneMotion : std::uint8_t {
@@ -101,6 +107,12 @@ inline constexpr std::uint32_t kSuiteScenes = 32;
 SceneOptions suite_scene(std::uint32_t index, std::uint32_t frames = 160);
 // Held-out scenes: indices 8..15, 24..31, ... (never used for tuning).
 constexpr bool suite_held_out(std::uint32_t index) noexcept { return (index / 8) % 2 == 1; }
+// The pipette scenes (gabarit bench --pipette, thesis 6.4): the glass
+// pipette over cluttered backgrounds, each motion and occlusion side, blur
+// and the illumination swing; scenes 0..3 for tuning, 4..7 held out.
+inline constexpr std::uint32_t kPipetteScenes = 8;
+SceneOptions pipette_scene(std::uint32_t index, std::uint32_t frames = 200);
+constexpr bool pipette_held_out(std::uint32_t index) noexcept { return index >= 4; }
 // "cog-gravel-smooth-cover-d5-s1": the scene's name in reports.
 std::string scene_name(const SceneOptions& options);
 

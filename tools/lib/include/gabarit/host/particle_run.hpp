@@ -1,0 +1,70 @@
+// The kernel's particle filter (particle_filter.hpp) as a host program runs
+// it: its buffers on the heap, the edge map over the whole frame, and the
+// frame loop gabarit track --tracker particle and the bench share.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "gabarit/app/image_io.hpp"
+#include "gabarit/app/pose_row.hpp"
+#include "gabarit/app/scratch.hpp"
+#include "gabarit/particle_filter.hpp"
+#include "gabarit/particle_measures.hpp"
+#include "gabarit/table_view.hpp"
+
+namespace gabarit::host {
+
+enum class ParticleMeasureKind : std::uint8_t {
+  kEdges,    // edge correlation (thesis 3.4.3), every edge_stride-th model point within edge_tolerance px
+  kStencil,  // the stencil vote of the particle's cell (the table voted once per frame at the prediction)
+};
+const char* name_of(ParticleMeasureKind kind) noexcept;
+
+struct ParticleRunOptions {
+  std::uint32_t particles = 1000;
+  std::uint64_t seed = 1;
+  ParticleMeasureKind measure = ParticleMeasureKind::kEdges;
+  ParticleFilterOptions filter;             // the chapter's improvements, each on by default
+  std::optional<Detector> detector;         // overrides the table's detector
+  std::uint32_t edge_stride = 2;            // the edge measure's model points: every n-th
+  std::uint32_t edge_tolerance = 1;         // pixels
+  // The finer measure (edge correlation over every model point) for
+  // disambiguation and confidence; it needs the edge map, which the stencil
+  // measure alone does not (gabarit track turns it off with --measure stencil).
+  bool finer = true;
+  app::VoterChoice voter = app::VoterChoice::kAuto;  // the stencil measure's vote
+};
+
+// Switches off the improvements a comma-separated list names (modes,
+// disambiguation, narrowing, kinematics, reinit, mode-filter, velocity; all:
+// plain CONDENSATION). Throws app::UsageError naming `option` for another word.
+void switch_off_improvements(const std::string& list, ParticleFilterOptions& options, const char* option);
+
+// A particle filter with its buffers, for frames of at most max_width x max_height.
+class ParticleTracker {
+ public:
+  ParticleTracker(const TableView& table, std::uint32_t max_width, std::uint32_t max_height, const ParticleRunOptions& options);
+  ParticleTracker(const ParticleTracker&) = delete;
+  ParticleTracker& operator=(const ParticleTracker&) = delete;
+  ~ParticleTracker();
+  // Throws app::Error with the kernel's status name on failure.
+  void start(const Pose& initial);
+  ParticleEstimate step(const app::GrayImage& frame);
+  ParticleFilter& filter();
+
+ private:
+  struct Parts;
+  std::unique_ptr<Parts> parts_;
+};
+
+// Calls on_row for every frame: the estimate as step.pose, state and score
+// (votes 0); micros is the filter's time for the frame.
+void run_particle_tracking(const TableView& table, app::FrameSource& frames, const Pose& init, const ParticleRunOptions& options,
+                           const std::function<void(const app::TrackRow&)>& on_row);
+
+}  // namespace gabarit::host

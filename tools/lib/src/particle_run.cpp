@@ -1,0 +1,138 @@
+#include "gabarit/host/particle_run.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <string>
+
+#include "gabarit/app/args.hpp"
+#include "gabarit/app/error.hpp"
+
+namespace gabarit::host {
+
+const char* name_of(ParticleMeasureKind kind) noexcept {
+  return kind == ParticleMeasureKind::kEdges ? "edges" : "stencil";
+}
+
+void switch_off_improvements(const std::string& list, ParticleFilterOptions& o, const char* option) {
+  for (std::size_t start = 0; start <= list.size();) {
+    const std::size_t comma = std::min(list.find(',', start), list.size());
+    const std::string word = list.substr(start, comma - start);
+    if (word == "all") {
+      o = plain_condensation();
+    } else if (word == "modes") {
+      o.modes = false;
+    } else if (word == "disambiguation") {
+      o.disambiguate = false;
+    } else if (word == "narrowing") {
+      o.narrow_spread = false;
+    } else if (word == "kinematics") {
+      o.kinematic_weighting = false;
+    } else if (word == "reinit") {
+      o.partial_reinit = false;
+    } else if (word == "mode-filter") {
+      o.mode_filter = false;
+    } else if (word == "velocity") {
+      o.constant_velocity = false;
+    } else {
+      throw app::UsageError(std::string(option) + ": '" + word +
+                            "' is none of modes, disambiguation, narrowing, kinematics, reinit, mode-filter, velocity, all");
+    }
+    start = comma + 1;
+  }
+}
+
+struct ParticleTracker::Parts {
+  Parts(const TableView& t, std::uint32_t w, std::uint32_t h, const ParticleRunOptions& o)
+      : table(t),
+        options(o),
+        detector(o.detector ? *o.detector : detector_of(t)),
+        bits(edge_map_words(w, h)),
+        features(std::size_t{w} * 16),  // strips of 16 rows
+        loader(detector, bits, features, static_cast<std::uint16_t>(w), static_cast<std::uint16_t>(h)),
+        edges(t, loader, o.edge_stride, o.edge_tolerance),
+        fine(t, loader, 1, o.edge_tolerance),
+        buffers(t, o.voter),
+        stencil(t, detector, buffers.scratch()),
+        cloud(o.particles),
+        next(o.particles),
+        order(particle_scratch_order(o.particles)),
+        filter(policies()) {}
+  ParticlePolicies policies() {
+    ParticlePolicies p;
+    // The edge map only where a measure reads it: the stencil measure alone needs none.
+    p.loader = options.measure == ParticleMeasureKind::kEdges || options.finer ? &loader : nullptr;
+    p.measure = options.measure == ParticleMeasureKind::kEdges ? static_cast<ParticleMeasure*>(&edges) : &stencil;
+    p.finer = options.finer ? &fine : nullptr;
+    return p;
+  }
+  const TableView& table;
+  ParticleRunOptions options;
+  Detector detector;
+  std::vector<std::uint64_t> bits;
+  std::vector<RoiPoint> features;
+  EdgeMapLoader loader;
+  EdgeCorrelationMeasure edges, fine;
+  app::TrackerBuffers buffers;
+  StencilVoteMeasure stencil;
+  std::vector<Particle> cloud, next;
+  std::vector<std::uint32_t> order;
+  ParticleFilter filter;
+};
+
+ParticleTracker::ParticleTracker(const TableView& table, std::uint32_t max_width, std::uint32_t max_height,
+                                 const ParticleRunOptions& options) {
+  if (options.particles < 1 || options.particles > kMaxParticles)
+    throw app::Error("particle filter: particles must be in 1.." + std::to_string(kMaxParticles));
+  if (max_width < 1 || max_height < 1 || max_width > 65535 || max_height > 65535)
+    throw app::Error("particle filter: frames must be 1..65535 pixels on a side");
+  if (!valid(options.filter)) throw app::Error("particle filter: invalid options");
+  parts_ = std::make_unique<Parts>(table, max_width, max_height, options);
+}
+ParticleTracker::~ParticleTracker() = default;
+
+ParticleFilter& ParticleTracker::filter() { return parts_->filter; }
+
+void ParticleTracker::start(const Pose& initial) {
+  const Status s = parts_->filter.start(parts_->options.filter, initial, parts_->table.depth_count(), parts_->options.seed,
+                                        {parts_->cloud, parts_->next, parts_->order});
+  if (s != Status::kOk) throw app::Error(std::string("particle filter: start failed: ") + status_name(s));
+}
+
+ParticleEstimate ParticleTracker::step(const app::GrayImage& frame) {
+  ParticleEstimate e;
+  const Status s = parts_->filter.step(frame.view(), e);
+  if (s != Status::kOk) throw app::Error(std::string("particle filter: step failed: ") + status_name(s));
+  return e;
+}
+
+void run_particle_tracking(const TableView& table, app::FrameSource& frames, const Pose& init, const ParticleRunOptions& options,
+                           const std::function<void(const app::TrackRow&)>& on_row) {
+  std::unique_ptr<ParticleTracker> tracker;
+  app::GrayImage frame;
+  std::uint32_t width = 0, height = 0;
+  for (std::uint32_t index = 0; frames.next(frame); ++index) {
+    if (!tracker) {
+      width = frame.width, height = frame.height;
+      tracker = std::make_unique<ParticleTracker>(table, width, height, options);
+      tracker->start(init);
+    } else if (frame.width != width || frame.height != height) {
+      throw app::Error("frame " + std::to_string(index) + ": " + std::to_string(frame.width) + "x" + std::to_string(frame.height) +
+                       ", the sequence began at " + std::to_string(width) + "x" + std::to_string(height));
+    }
+    const auto start = std::chrono::steady_clock::now();
+    const ParticleEstimate e = tracker->step(frame);
+    const auto stop = std::chrono::steady_clock::now();
+    app::TrackRow row;
+    row.frame = index;
+    row.step.pose = e.pose;
+    row.step.score = e.score;
+    row.step.state = e.state;
+    row.confidence = e.state == TrackState::kTracking ? Confidence::kHigh
+                     : e.state == TrackState::kUncertain ? Confidence::kIntermediate
+                                                         : Confidence::kNone;
+    row.micros = std::chrono::duration<double, std::micro>(stop - start).count();
+    on_row(row);
+  }
+}
+
+}  // namespace gabarit::host
