@@ -286,7 +286,9 @@ Status ParticleFilter::start(const ParticleFilterOptions& options, const Pose& i
   context_.estimate = context_.predicted = context_.reinit_centre = initial;
   context_.depth_count = depth_count;
   context_.options = &options_;
-  context_.confidence = 1.0f;  // the initial pose is given
+  // No confidence yet: the velocity is unknown, so the first frames diffuse
+  // at full spread and are not over-weighted towards a standing prediction.
+  context_.confidence = 0.0f;
   // The first cloud: spread around the initial pose as partial
   // re-initialisation would draw.
   for (Particle& p : cloud_) {

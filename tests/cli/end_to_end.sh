@@ -135,6 +135,28 @@ $g tables inspect "$s/t10.gbt" > "$s/t10.json" && grep -q '"images_stored": fals
 $g track --table "$s/t10.gbt" --frames "$s/frames.y4m" --init "$init" -o "$s/p10.csv" 2>/dev/null || fail "track a 1.0 table"
 cmp -s "$s/pn.csv" "$s/p10.csv" || fail "a table without images should track as --no-focus-stack"
 $g track --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init" --plain -o "$s/pp.csv" 2>/dev/null || fail "track --plain"
+# The particle filter (docs/particle-filter.md): it tracks the scene, the
+# same seed gives the same bytes, another seed others; options are checked.
+$g track --tracker particle --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init" -o "$s/pa.csv" 2>/dev/null || fail "track --tracker particle"
+$g track --tracker particle --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init" -o "$s/pb.csv" 2>/dev/null || fail "track --tracker particle (again)"
+cmp -s "$s/pa.csv" "$s/pb.csv" || fail "the particle filter: the same seed gave different poses"
+$g track --tracker particle --seed 2 --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init" -o "$s/pc.csv" 2>/dev/null || fail "--seed 2"
+cmp -s "$s/pa.csv" "$s/pc.csv" && fail "the particle filter: another seed gave the same poses"
+[ "$(wc -l < "$s/pa.csv")" = 41 ] || fail "the particle filter: one row per frame expected"
+$g eval --gt "$s/gt.csv" --poses "$s/pa.csv" > "$s/acc_pf.json" || fail "eval the particle filter"
+python3 - "$s/acc_pf.json" <<'PY' || fail "the particle filter lost the microscope scene: $(cat "$s/acc_pf.json")"
+import json, sys
+a = json.load(open(sys.argv[1]))
+sys.exit(0 if a["within_2px"] >= 0.8 * a["frames"] else 1)
+PY
+$g track --tracker particle --measure stencil --without all --particles 200 --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init" \
+  -o "$s/ps.csv" 2>/dev/null || fail "track --tracker particle --measure stencil --without all"
+expect 2 "applies to --tracker particle" $g track --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init" --particles 10
+expect 2 "not --tracker particle" $g track --tracker particle --plain --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init"
+expect 2 "want stencil or particle" $g track --tracker kalman --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init"
+expect 2 "want edges or stencil" $g track --tracker particle --measure votes --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init"
+expect 2 "is none of" $g track --tracker particle --without speed --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init"
+expect 2 "--particles" $g track --tracker particle --particles 0 --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init"
 expect 1 "the focus stack has 1 images; the table has 2 depths" $g track --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init" \
   --motion-filter --focus-stack "$s/model_00.pgm"
 expect 2 "applies to the plain loop" $g track --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init" --threads 2 \

@@ -59,7 +59,7 @@ int track(const std::vector<std::string>& argv) {
              {"--measure", "edges|stencil", "--tracker particle: edge correlation over the table's model points\n"
               "                          (default), or the stencil vote of each particle's cell"},
              {"--edge-stride", "N", "--measure edges: every N-th model point, 1..64 (default 2)"},
-             {"--edge-tolerance", "PX", "--measure edges: a point within PX pixels of an edge counts, 0..3 (default 1)"},
+             {"--edge-tolerance", "PX", "--measure edges: a point within PX pixels of an edge counts, 0..3 (default 0)"},
              {"--without", "LIST", "--tracker particle: improvements to switch off, comma-separated: modes,\n"
               "                          disambiguation, narrowing, kinematics, reinit, mode-filter, velocity;\n"
               "                          all: plain CONDENSATION"},
@@ -172,7 +172,7 @@ int track(const std::vector<std::string>& argv) {
       throw app::UsageError("--measure '" + m + "': want edges or stencil");
     }
     po.edge_stride = static_cast<std::uint32_t>(args.integer("--edge-stride", 2, 1, 64));
-    po.edge_tolerance = static_cast<std::uint32_t>(args.integer("--edge-tolerance", 1, 0, 3));
+    po.edge_tolerance = static_cast<std::uint32_t>(args.integer("--edge-tolerance", 0, 0, 3));
     if (args.has("--without")) host::switch_off_improvements(args.get("--without"), po.filter, "--without");
     host::run_particle_tracking(table, *frames, pose, po, on_row);
   } else {
