@@ -16,6 +16,7 @@
 #include "gabarit/app/image_io.hpp"
 #include "gabarit/tracker.hpp"
 #include "gabarit/depth_by_intensity.hpp"
+#include "gabarit/particle_measures.hpp"
 #include "gabarit/tracking_session.hpp"
 #include "gabarit/voter.hpp"
 #include "test_tables.hpp"
@@ -198,6 +199,28 @@ int main() {
     for (int i = 0; i < 3 && ok; ++i) ok = aligned.step(view, {scratch, {}}, r) == Status::kOk;
     return ok;
   });
-  std::printf("%d passed, %d failed\n", 15 - failures, failures);
+  // The particle filter with both measures, every improvement on, a scatter and lost frames.
+  {
+    static std::uint64_t bits[edge_map_words(64, 64)];
+    static RoiPoint strip[64 * 4];
+    static Particle cloud[256], next[256];
+    static std::uint32_t order[512];
+    EdgeMapLoader loader(detector_of(table), bits, strip, 64, 64);
+    EdgeCorrelationMeasure edges(table, loader, 2, 0), fine(table, loader, 1, 0);
+    StencilVoteMeasure stencil(table, detector_of(table), scratch);
+    for (ParticleMeasure* measure : {static_cast<ParticleMeasure*>(&edges), static_cast<ParticleMeasure*>(&stencil)}) {
+      ParticleFilter filter(ParticlePolicies{&loader, measure, &fine});
+      expect_no_allocation(measure == &edges ? "particle filter, edge measure" : "particle filter, stencil measure", [&] {
+        ParticleEstimate e;
+        bool ok = filter.start(ParticleFilterOptions{}, Pose{32, 32, 0, 0}, table.depth_count(), 7, {cloud, next, order}) == Status::kOk;
+        for (int i = 0; i < 3 && ok; ++i) ok = filter.step(view, e) == Status::kOk;
+        ok = ok && filter.scatter(10, 50, 10, 50, -5, 5) == Status::kOk;
+        for (int i = 0; i < 3 && ok; ++i) ok = filter.step(blank.view(), e) == Status::kOk;
+        filter.reinitialise_around(Pose{32, 32, 0, 0}, 0.5f);
+        return ok && filter.step(view, e) == Status::kOk;
+      });
+    }
+  }
+  std::printf("%d passed, %d failed\n", 17 - failures, failures);
   return failures == 0 ? 0 : 1;
 }

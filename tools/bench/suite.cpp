@@ -12,6 +12,7 @@
 #include "gabarit/app/error.hpp"
 #include "gabarit/host/evaluation.hpp"
 #include "gabarit/host/model.hpp"
+#include "gabarit/host/particle_run.hpp"
 #include "gabarit/host/scene_synth.hpp"
 #include "gabarit/host/table_builder.hpp"
 #include "gabarit/host/tracking_run.hpp"
@@ -41,10 +42,14 @@ struct SceneResult {
   std::uint32_t index = 0;
   std::string name;
   bool held_out = false;
-  std::vector<Measure> methods;  // plain, session, NCC
+  std::vector<Measure> methods;  // plain, session, then NCC (with the peer), then the particle filter (with particles)
+  std::vector<const char*> names;
 };
 
-const char* const kMethods[] = {"plain loop (thesis)", "gabarit default session", "OpenCV NCC bank"};
+constexpr const char* kPlain = "plain loop (thesis)";
+constexpr const char* kSession = "gabarit default session";
+constexpr const char* kNcc = "OpenCV NCC bank";
+constexpr const char* kParticle = "particle filter (edges, 1000 particles)";
 
 // For each return to visibility after hidden frames (in order, as
 // Accuracy::reacquired_after): whether the target reappears where the
@@ -110,7 +115,7 @@ Measure measure(const std::vector<host::PoseSample>& poses, const std::vector<ho
   return m;
 }
 
-SceneResult run_scene(std::uint32_t index, std::uint32_t frames_per_scene, const std::filesystem::path& dir, bool peer) {
+SceneResult run_scene(std::uint32_t index, std::uint32_t frames_per_scene, const std::filesystem::path& dir, bool peer, bool particles) {
   const host::SceneOptions so = host::suite_scene(index, frames_per_scene);
   char sub[16];
   std::snprintf(sub, sizeof sub, "%02u", index);
@@ -156,6 +161,7 @@ SceneResult run_scene(std::uint32_t index, std::uint32_t frames_per_scene, const
       micros.push_back(row.micros);
     });
     out.methods.push_back(measure(poses, truth, micros, depth_counts, in_reach));
+    out.names.push_back(robust ? kSession : kPlain);
   }
   if (peer) {
     NccBank ncc(models, 5, 0.5, 3);
@@ -169,6 +175,18 @@ SceneResult run_scene(std::uint32_t index, std::uint32_t frames_per_scene, const
       poses.push_back({f, pose.x, pose.y, pose.theta_deg, pose.depth, true});
     }
     out.methods.push_back(measure(poses, truth, micros, depth_counts, in_reach));
+    out.names.push_back(kNcc);
+  }
+  if (particles) {  // gabarit track --tracker particle's defaults
+    std::vector<host::PoseSample> poses;
+    std::vector<double> micros;
+    MemoryFrames src(frames);
+    host::run_particle_tracking(table, src, init, host::ParticleRunOptions{}, [&](const app::TrackRow& row) {
+      poses.push_back({row.frame, row.step.pose.x, row.step.pose.y, row.step.pose.theta_deg, row.step.pose.depth, true});
+      micros.push_back(row.micros);
+    });
+    out.methods.push_back(measure(poses, truth, micros, depth_counts, in_reach));
+    out.names.push_back(kParticle);
   }
   return out;
 }
@@ -205,7 +223,7 @@ void summary_table(const std::vector<SceneResult>& scenes, const std::string& ti
     const auto worst = [](const std::vector<double>& v) { return v.empty() ? 0.0 : *std::min_element(v.begin(), v.end()); };
     double mean_all = 0;
     for (double v : mean_us) mean_all += v / static_cast<double>(mean_us.size());
-    md << "| " << kMethods[m] << " | " << fmt(median(px1)) << "% | " << fmt(worst(px1)) << "% | " << fmt(median(px2)) << "% | "
+    md << "| " << scenes[0].names[m] << " | " << fmt(median(px1)) << "% | " << fmt(worst(px1)) << "% | " << fmt(median(px2)) << "% | "
        << fmt(worst(px2)) << "% | " << fmt(median(deg)) << "% | " << fmt(worst(deg)) << "% | "
        << (depth.empty() ? "-" : fmt(median(depth)) + "%") << " | " << (depth.empty() ? "-" : fmt(worst(depth)) + "%") << " | "
        << reacq(worst_reacq) << " | " << reacq(worst_in_reach) << " | " << fmt(mean_all) << " | " << fmt(median(p99)) << " | "
@@ -234,10 +252,11 @@ void summary_table(const std::vector<SceneResult>& scenes, const std::string& ti
      << worst_scene << "); the session is at least as good within 1 px on " << better_median << " of " << scenes.size()
      << " scenes; it reacquires within 10 frames on " << within_10 << " of the " << in_reach
      << " scenes whose occlusion ends within the recovery search's reach.";
-  if (methods > 2) {
-    double ncc = 0, session = 0;
-    for (const SceneResult& s : scenes) ncc += s.methods[2].mean_us, session += s.methods[1].mean_us;
-    md << " NCC bank time / default session time (mean over frames of all scenes): " << fmt(ncc / std::max(1e-9, session)) << "x.";
+  for (std::size_t m = 2; m < methods; ++m) {
+    double other = 0, session = 0;
+    for (const SceneResult& s : scenes) other += s.methods[m].mean_us, session += s.methods[1].mean_us;
+    md << " " << scenes[0].names[m] << " time / default session time (mean over frames of all scenes): "
+       << fmt(other / std::max(1e-9, session)) << "x.";
   }
   md << "\n\n";
 }
@@ -256,11 +275,11 @@ int run_suite(const SuiteOptions& o) {
   csv << "index,name,half,method,within_1px,within_2px,within_1deg,depth_exact,reacquired_after,reacquired_in_reach,mean_us,p99_us\n";
   for (std::uint32_t i = 0; i < scenes; ++i) {
     std::fprintf(stderr, "\rsuite: scene %u/%u", i + 1, scenes);
-    results.push_back(run_scene(i, frames, dir, o.peer));
+    results.push_back(run_scene(i, frames, dir, o.peer, o.particles));
     const SceneResult& r = results.back();
     for (std::size_t m = 0; m < r.methods.size(); ++m) {
       const Measure& x = r.methods[m];
-      csv << r.index << "," << r.name << "," << (r.held_out ? "held-out" : "tuning") << "," << kMethods[m] << "," << fmt(x.within_1px)
+      csv << r.index << "," << r.name << "," << (r.held_out ? "held-out" : "tuning") << "," << r.names[m] << "," << fmt(x.within_1px)
           << "," << fmt(x.within_2px) << "," << fmt(x.within_1deg) << "," << (x.depth < 0 ? "" : fmt(x.depth)) << ","
           << x.reacquired << "," << x.reacquired_in_reach << "," << fmt(x.mean_us) << "," << fmt(x.p99_us) << "\n";
     }
@@ -283,7 +302,7 @@ int run_suite(const SuiteOptions& o) {
   for (const SceneResult& r : results)
     for (std::size_t m = 0; m < r.methods.size(); ++m) {
       const Measure& x = r.methods[m];
-      md << "| " << r.index << " | " << r.name << " | " << (r.held_out ? "held-out" : "tuning") << " | " << kMethods[m] << " | "
+      md << "| " << r.index << " | " << r.name << " | " << (r.held_out ? "held-out" : "tuning") << " | " << r.names[m] << " | "
          << fmt(x.within_1px) << " | " << fmt(x.within_2px) << " | " << fmt(x.within_1deg) << " | "
          << (x.depth < 0 ? "-" : fmt(x.depth)) << " | " << reacq(x.reacquired) << " | " << reacq(x.reacquired_in_reach) << " | "
          << fmt(x.mean_us) << " | " << fmt(x.p99_us)

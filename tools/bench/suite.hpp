@@ -1,5 +1,5 @@
-// gabarit bench --suite: the default tracker, the thesis's plain loop and the
-// OpenCV NCC bank over the scene suite (scene_synth.hpp, docs/scene-suite.md),
+// gabarit bench --suite: the default tracker, the thesis's plain loop, the
+// OpenCV NCC bank and the particle filter over the scene suite (scene_synth.hpp, docs/scene-suite.md),
 // each scene with its own table; per scene and per half (tuning, held out)
 // the median and the worst scene of every metric, and mean and p99 us/frame.
 #pragma once
@@ -15,6 +15,7 @@ struct SuiteOptions {
   std::uint32_t scenes = 0;       // 0: all kSuiteScenes (quick: 8)
   std::uint32_t frames = 0;       // 0: 160 (quick: 60)
   bool peer = true;               // run the NCC bank too
+  bool particles = true;          // run the particle filter too (gabarit track --tracker particle)
 };
 
 // Writes DIR/suite.md and DIR/suite-scenes.csv; returns the exit code.
