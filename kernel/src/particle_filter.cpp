@@ -315,19 +315,29 @@ void ParticleFilter::reinitialise_around(const Pose& pose, float fraction) noexc
   external_fraction_ = fraction > 1.0f ? 1.0f : fraction;
 }
 
-Status ParticleFilter::scatter(float x0, float x1, float y0, float y1, float theta0_deg, float theta1_deg) noexcept {
+void ParticleFilter::draw_uniform(Particle& p, const float* r) noexcept {
+  p.pose.x = r[0] + (r[1] - r[0]) * rng_.uniform();
+  p.pose.y = r[2] + (r[3] - r[2]) * rng_.uniform();
+  p.pose.theta_deg = r[4] + (r[5] - r[4]) * rng_.uniform();
+  p.pose.depth = static_cast<std::uint16_t>(rng_.uniform() * static_cast<float>(context_.depth_count));
+  if (p.pose.depth >= context_.depth_count) p.pose.depth = static_cast<std::uint16_t>(context_.depth_count - 1);
+  p.weight = 1.0f / static_cast<float>(cloud_.size());
+}
+
+Status ParticleFilter::scatter(float x0, float x1, float y0, float y1, float theta0_deg, float theta1_deg,
+                               float fraction) noexcept {
   if (!started_) return Status::kInvalidArgument;
   const auto ordered = [](float a, float b) { return within_limit(a, kPoseLimit) && within_limit(b, kPoseLimit) && a <= b; };
   if (!ordered(x0, x1) || !ordered(y0, y1) || !ordered(theta0_deg, theta1_deg)) return Status::kInvalidArgument;
-  const float w = 1.0f / static_cast<float>(cloud_.size());
-  for (Particle& p : cloud_) {
-    p.pose.x = x0 + (x1 - x0) * rng_.uniform();
-    p.pose.y = y0 + (y1 - y0) * rng_.uniform();
-    p.pose.theta_deg = theta0_deg + (theta1_deg - theta0_deg) * rng_.uniform();
-    p.pose.depth = static_cast<std::uint16_t>(rng_.uniform() * static_cast<float>(context_.depth_count));
-    if (p.pose.depth >= context_.depth_count) p.pose.depth = static_cast<std::uint16_t>(context_.depth_count - 1);
-    p.weight = w;
+  if (!(fraction > 0.0f && fraction <= 1.0f)) return Status::kInvalidArgument;
+  const float region[6] = {x0, x1, y0, y1, theta0_deg, theta1_deg};
+  if (fraction < 1.0f) {
+    for (int i = 0; i < 6; ++i) scatter_[i] = region[i];
+    scatter_fraction_ = fraction;
+    return Status::kOk;
   }
+  for (Particle& p : cloud_) draw_uniform(p, region);
+  scatter_fraction_ = 0.0f;
   scattered_ = true;
   context_.lost = true;
   return Status::kOk;
@@ -364,7 +374,18 @@ Status ParticleFilter::step(const ImageView& image, ParticleEstimate& out) noexc
     cloud_ = next_;
     next_ = t;
     out.reinitialised = c.reinit_fraction > 0.0f;
+    if (scatter_fraction_ > 0.0f) {
+      // A partial scatter: every k-th particle re-drawn over the region
+      // (spread over the cloud, which propagation leaves in picking order).
+      const auto n = static_cast<std::uint32_t>(cloud_.size());
+      auto count = static_cast<std::uint32_t>(scatter_fraction_ * static_cast<float>(n) + 0.5f);
+      if (count > n) count = n;
+      for (std::uint32_t k = 0; k < count; ++k) draw_uniform(cloud_[static_cast<std::size_t>(k) * n / count], scatter_);
+      scatter_fraction_ = 0.0f;
+      out.reinitialised = true;
+    }
   }
+  scatter_fraction_ = 0.0f;
   scattered_ = false;
 
   // Image loading over the particles' window plus the measure's reach.

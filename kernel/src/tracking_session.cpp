@@ -40,6 +40,7 @@ Status TrackingSession::start(const SessionOptions& options, const Pose& initial
 void TrackingSession::begin_lost() noexcept {
   lost_ = true;
   search_.reset();  // nearest placements first
+  if (particles_ != nullptr) particles_->reset();  // the whole cloud spread again
 }
 
 Status TrackingSession::step(const ImageView& image, SessionScratch scratch, SessionResult& out) noexcept {
@@ -228,7 +229,11 @@ Status TrackingSession::recover(const ImageView& image, SessionScratch scratch, 
   SearchResult found;
   // The depth last seen with confidence: the frames since, unsure, may have
   // set the pose's depth from clutter.
-  GABARIT_TRY(search_.run(image, options_.recovery, last_confident_, last_confident_.pose.depth, scratch, found));
+  if (particles_ != nullptr) {
+    GABARIT_TRY(particles_->run(image, last_confident_, scratch.fine, found));
+  } else {
+    GABARIT_TRY(search_.run(image, options_.recovery, last_confident_, last_confident_.pose.depth, scratch, found));
+  }
   out.searched_coarse = found.searched_coarse;
   out.state = TrackState::kLost;
   out.pose = pose_;

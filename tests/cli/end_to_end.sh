@@ -151,6 +151,11 @@ sys.exit(0 if a["within_2px"] >= 0.8 * a["frames"] else 1)
 PY
 $g track --tracker particle --measure stencil --without all --particles 200 --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init" \
   -o "$s/ps.csv" 2>/dev/null || fail "track --tracker particle --measure stencil --without all"
+$g track --recovery particle --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init" -o "$s/pr.csv" 2>/dev/null || fail "track --recovery particle"
+$g eval --gt "$s/gt.csv" --poses "$s/pr.csv" > "$s/acc_pr.json" || fail "eval --recovery particle"
+grep -q '"reacquired_after_frames": \[[0-9]' "$s/acc_pr.json" || fail "--recovery particle: not reacquired after the occlusion: $(cat "$s/acc_pr.json")"
+expect 2 "needs recovery" $g track --recovery particle --plain --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init"
+expect 2 "want grid or particle" $g track --recovery kalman --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init"
 expect 2 "applies to --tracker particle" $g track --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init" --particles 10
 expect 2 "not --tracker particle" $g track --tracker particle --plain --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init"
 expect 2 "want stencil or particle" $g track --tracker kalman --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init"

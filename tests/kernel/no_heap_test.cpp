@@ -221,6 +221,29 @@ int main() {
       });
     }
   }
-  std::printf("%d passed, %d failed\n", 17 - failures, failures);
+  // A session re-acquiring through the particle filter.
+  {
+    static std::uint64_t bits[edge_map_words(64, 64)];
+    static RoiPoint strip[64 * 4];
+    static Particle cloud[256], next[256];
+    static std::uint32_t order[512];
+    EdgeMapLoader loader(detector_of(table), bits, strip, 64, 64);
+    EdgeCorrelationMeasure edges(table, loader, 2, 0), fine(table, loader, 1, 0);
+    ParticleFilter filter(ParticlePolicies{&loader, &edges, &fine});
+    ParticleRecovery stage(table, detector_of(table), filter);
+    TrackingSession with_particles(table, nullptr, detector_of(table));
+    with_particles.use_particle_recovery(&stage);
+    expect_no_allocation("tracking session, particle re-acquisition", [&] {
+      SessionResult r;
+      bool ok = filter.start(ParticleFilterOptions{}, Pose{32, 32, 0, 0}, table.depth_count(), 7, {cloud, next, order}) == Status::kOk;
+      ok = ok && with_particles.start(SessionOptions{}, Pose{32, 32, 0, 0}) == Status::kOk;
+      ok = ok && with_particles.step(view, {scratch, {}}, r) == Status::kOk;
+      for (int i = 0; i < 12 && ok; ++i) ok = with_particles.step(blank.view(), {scratch, {}}, r) == Status::kOk;
+      ok = ok && with_particles.lost();
+      for (int i = 0; i < 3 && ok; ++i) ok = with_particles.step(view, {scratch, {}}, r) == Status::kOk;
+      return ok && stage.frames() > 0;
+    });
+  }
+  std::printf("%d passed, %d failed\n", 18 - failures, failures);
   return failures == 0 ? 0 : 1;
 }

@@ -38,6 +38,7 @@ struct Method {
   bool session;      // the motion model (default session), else the plain loop
   bool particle;     // the particle filter instead
   host::ParticleMeasureKind measure;
+  bool particle_recovery = false;  // the session re-acquiring with the particle filter
 };
 const Method kMethods[] = {
     {"custom edges, no motion model (plain loop)", false, false, false, {}},
@@ -46,6 +47,7 @@ const Method kMethods[] = {
     {"Canny, motion model (default session)", true, true, false, {}},
     {"particle filter, edge measure (Canny)", true, false, true, host::ParticleMeasureKind::kEdges},
     {"particle filter, stencil measure (Canny table)", true, false, true, host::ParticleMeasureKind::kStencil},
+    {"Canny, motion model, particle re-acquisition", true, true, false, {}, true},
 };
 constexpr std::size_t kMethodCount = sizeof kMethods / sizeof kMethods[0];
 
@@ -214,6 +216,7 @@ int run_pipette(const PipetteOptions& o) {
         host::TrackingOptions to;
         to.session = method.session ? SessionOptions{} : kPlainSession;
         to.table_focus_stack = method.session;
+        to.particle_recovery = method.particle_recovery;
         host::run_tracking(table, src, init, to, on_row);
       }
       const Tally t = score(poses, truth, micros);

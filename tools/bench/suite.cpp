@@ -36,6 +36,11 @@ struct Measure {
   int reacquired = 0;           // worst frames to reacquire after an occlusion (-1: never)
   int reacquired_in_reach = 0;  // the same over occlusions the recovery search can reach (-2: none)
   double mean_us = 0, p99_us = 0;
+  // Sessions only: occlusions, those re-acquired (within 2 px) within 10
+  // frames, and the frames that searched (lost, or re-acquiring) with their mean time.
+  int occlusions = 0, reacquired_within_10 = 0;
+  std::size_t search_frames = 0;
+  double search_us = 0;
 };
 
 struct SceneResult {
@@ -50,6 +55,7 @@ constexpr const char* kPlain = "plain loop (thesis)";
 constexpr const char* kSession = "gabarit default session";
 constexpr const char* kNcc = "OpenCV NCC bank";
 constexpr const char* kParticle = "particle filter (edges, 1000 particles)";
+constexpr const char* kSessionParticles = "default session, particle re-acquisition";
 
 // For each return to visibility after hidden frames (in order, as
 // Accuracy::reacquired_after): whether the target reappears where the
@@ -148,21 +154,32 @@ SceneResult run_scene(std::uint32_t index, std::uint32_t frames_per_scene, const
   out.index = index;
   out.name = host::scene_name(so);
   out.held_out = host::suite_held_out(index);
-  for (const bool robust : {false, true}) {
+  // The defaults of gabarit track, of gabarit track --plain, and (with
+  // particles) of gabarit track --recovery particle.
+  const auto session_run = [&](bool robust, bool particle_recovery, const char* name) {
     host::TrackingOptions options;
-    // The defaults of gabarit track, and of gabarit track --plain.
     options.session = robust ? SessionOptions{} : kPlainSession;
     options.table_focus_stack = robust;
+    options.particle_recovery = particle_recovery;
     std::vector<host::PoseSample> poses;
-    std::vector<double> micros;
+    std::vector<double> micros, lost_micros;
     MemoryFrames src(frames);
     host::run_tracking(table, src, init, options, [&](const app::TrackRow& row) {
       poses.push_back({row.frame, row.step.pose.x, row.step.pose.y, row.step.pose.theta_deg, row.step.pose.depth, true});
       micros.push_back(row.micros);
+      if (row.step.state == TrackState::kLost || row.reacquired) lost_micros.push_back(row.micros);  // the frames that searched
     });
     out.methods.push_back(measure(poses, truth, micros, depth_counts, in_reach));
-    out.names.push_back(robust ? kSession : kPlain);
-  }
+    Measure& m = out.methods.back();
+    const host::Accuracy a = host::evaluate(poses, truth);
+    m.occlusions = static_cast<int>(a.reacquired_after.size());
+    for (int r : a.reacquired_after) m.reacquired_within_10 += r >= 0 && r <= 10;
+    m.search_frames = lost_micros.size();
+    for (double v : lost_micros) m.search_us += v / static_cast<double>(lost_micros.size());
+    out.names.push_back(name);
+  };
+  session_run(false, false, kPlain);
+  session_run(true, false, kSession);
   if (peer) {
     NccBank ncc(models, 5, 0.5, 3);
     Pose pose = init;
@@ -177,6 +194,7 @@ SceneResult run_scene(std::uint32_t index, std::uint32_t frames_per_scene, const
     out.methods.push_back(measure(poses, truth, micros, depth_counts, in_reach));
     out.names.push_back(kNcc);
   }
+  if (particles) session_run(true, true, kSessionParticles);
   if (particles) {  // gabarit track --tracker particle's defaults
     std::vector<host::PoseSample> poses;
     std::vector<double> micros;
@@ -259,6 +277,30 @@ void summary_table(const std::vector<SceneResult>& scenes, const std::string& ti
        << fmt(other / std::max(1e-9, session)) << "x.";
   }
   md << "\n\n";
+  // The two re-acquisition stages side by side, over every occlusion (not only those within the grid's reach).
+  const auto index_of = [&](const char* name) {
+    for (std::size_t m = 0; m < scenes[0].names.size(); ++m)
+      if (scenes[0].names[m] == std::string(name)) return static_cast<int>(m);
+    return -1;
+  };
+  const int grid = index_of(kSession), particle = index_of(kSessionParticles);
+  if (grid >= 0 && particle >= 0) {
+    md << "| re-acquisition | occlusions re-acquired within 10 frames | search frames | mean us per search frame |\n|---|---:|---:|---:|\n";
+    for (const int m : {grid, particle}) {
+      int occlusions = 0, within = 0;
+      std::size_t frames = 0;
+      double us = 0;
+      for (const SceneResult& sr : scenes) {
+        const Measure& r = sr.methods[static_cast<std::size_t>(m)];
+        occlusions += r.occlusions, within += r.reacquired_within_10;
+        us += r.search_us * static_cast<double>(r.search_frames);
+        frames += r.search_frames;
+      }
+      md << "| " << (m == grid ? "grid search (default)" : "particle filter over the frame") << " | " << within << " of " << occlusions
+         << " | " << frames << " | " << fmt(frames ? us / static_cast<double>(frames) : 0.0) << " |\n";
+    }
+    md << "\n";
+  }
 }
 
 }  // namespace

@@ -52,6 +52,9 @@ int track(const std::vector<std::string>& argv) {
                                                   "frame's depth (and the reported angle) by intensity (normalised\n"
                                                   "cross-correlation) at the tracked pose"},
              {"--no-focus-stack", "", "ignore the table's model images: depth from the winning stencils only"},
+             {"--recovery", "grid|particle", "how the session re-acquires a lost target: the grid search around where it\n"
+              "                          was last seen (default), or a particle filter over the whole frame\n"
+              "                          (docs/particle-filter.md), whose best modes the table verifies"},
              {"--tracker", "stencil|particle", "stencil (default): the stencil session above; particle: the thesis's\n"
               "                          particle filter (chapter 3, docs/particle-filter.md) with the table's model"},
              {"--particles", "N", "--tracker particle: particles, 1..1000000 (default 1000)"},
@@ -75,7 +78,7 @@ int track(const std::vector<std::string>& argv) {
   for (const char* option : {"--particles", "--seed", "--measure", "--without", "--edge-stride", "--edge-tolerance"})
     if (!particle && args.has(option)) throw app::UsageError(std::string(option) + " applies to --tracker particle");
   if (particle) {
-    for (const char* option : {"--plain", "--motion-filter", "--refine", "--recover", "--subcell", "--coarse", "--search-budget",
+    for (const char* option : {"--plain", "--motion-filter", "--refine", "--recover", "--recovery", "--subcell", "--coarse", "--search-budget",
                                "--screen-stride", "--search-interval", "--threads", "--focus-stack", "--no-focus-stack"})
       if (args.has(option)) throw app::UsageError(std::string(option) + " applies to the stencil tracker, not --tracker particle");
   }
@@ -99,6 +102,13 @@ int track(const std::vector<std::string>& argv) {
   }
   if (args.has("--subcell") && !options.session.refine) throw app::UsageError("--subcell needs refinement: drop --plain or add --refine");
   if (args.has("--subcell") && options.threads > 1) throw app::UsageError("--subcell applies to the session, not --threads");
+  if (const std::string recovery = args.get_or("--recovery", "grid"); recovery == "particle") {
+    if (!options.session.recover) throw app::UsageError("--recovery particle needs recovery: drop --plain or add --recover");
+    if (args.has("--coarse")) throw app::UsageError("--recovery particle replaces the --coarse search; give one of them");
+    options.particle_recovery = true;
+  } else if (recovery != "grid") {
+    throw app::UsageError("--recovery '" + recovery + "': want grid or particle");
+  }
   options.session.recovery.budget = static_cast<std::uint32_t>(args.integer("--search-budget", 0, 1, 558));
   options.session.recovery.interval = static_cast<std::uint32_t>(args.integer("--search-interval", 1, 1, 100));
   options.session.recovery.screen_stride = static_cast<std::uint32_t>(args.integer("--screen-stride", 2, 1, 16));

@@ -295,11 +295,15 @@ class ParticleFilter {
   // tracker's, a detector's): the next step draws `fraction` (0..1) of the
   // cloud around it. Ignored for a pose outside pose_in_range.
   void reinitialise_around(const Pose& pose, float fraction) noexcept;
-  // Spreads the whole cloud uniformly over a region of the image (x0..x1,
-  // y0..y1, theta0..theta1, every depth), for a search from nothing: the next
-  // step measures it. Errors: kInvalidArgument before start() or for an empty
-  // or non-finite region.
-  [[nodiscard]] Status scatter(float x0, float x1, float y0, float y1, float theta0_deg, float theta1_deg) noexcept;
+  // Spreads the cloud uniformly over a region of the image (x0..x1, y0..y1,
+  // theta0..theta1, every depth), for a search from nothing. With fraction 1
+  // the whole cloud, which the next step measures as it is; with less, the
+  // next step propagates the cloud as usual and then re-draws that fraction
+  // of it over the region (a search that keeps looking elsewhere). Errors:
+  // kInvalidArgument before start(), for a reversed or non-finite region or
+  // a fraction outside (0, 1].
+  [[nodiscard]] Status scatter(float x0, float x1, float y0, float y1, float theta0_deg, float theta1_deg,
+                               float fraction = 1.0f) noexcept;
 
   const ParticleContext& context() const noexcept { return context_; }
   std::span<const Particle> particles() const noexcept { return cloud_; }
@@ -325,6 +329,10 @@ class ParticleFilter {
   bool scattered_ = false;          // the cloud was scattered: the next step skips propagation
   Pose external_reinit_;
   float external_fraction_ = 0.0f;
+  float scatter_[6] = {};           // a pending partial scatter's region
+  float scatter_fraction_ = 0.0f;   // and its share of the cloud (0: none)
+
+  void draw_uniform(Particle& p, const float* region) noexcept;
 };
 
 }  // namespace gabarit

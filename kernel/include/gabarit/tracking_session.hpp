@@ -5,7 +5,8 @@
 //   - sub-cell refinement (refinement.hpp) of the chosen cell;
 //   - recovery (recovery_search.hpp): once lost, a search around the last
 //     confident pose, whose best candidate returns the session to tracking
-//     only at high confidence;
+//     only at high confidence; or, given a particle recovery stage
+//     (particle_recovery.hpp), a particle filter over the whole frame;
 //   - depth and angle by intensity (depth_by_intensity.hpp), with a focus stack.
 // With everything off (kPlainSession) a session is exactly track_step frame
 // after frame, a lost frame keeping the previous pose.
@@ -17,6 +18,7 @@
 
 #include "gabarit/depth_by_intensity.hpp"
 #include "gabarit/motion_filter.hpp"
+#include "gabarit/particle_recovery.hpp"
 #include "gabarit/recovery_search.hpp"
 #include "gabarit/refinement.hpp"
 #include "gabarit/tracker.hpp"
@@ -87,6 +89,10 @@ class TrackingSession {
   // each frame's depth is then chosen by intensity at the tracked pose
   // (depth_by_intensity.hpp) instead of by the winning stencils' stack index.
   void use_focus_stack(const FocusStack* stack) noexcept { stack_ = stack; }
+  // With a particle recovery stage (which must outlive the session; nullptr
+  // to stop), lost frames re-acquire through it (particle_recovery.hpp)
+  // instead of the grid search; its result is accepted by the same rule.
+  void use_particle_recovery(ParticleRecovery* stage) noexcept { particles_ = stage; }
 
   const Pose& pose() const noexcept { return pose_; }
   float reference_score() const noexcept { return filter_.reference(); }
@@ -123,6 +129,7 @@ class TrackingSession {
   LastSighting last_confident_;  // where recovery searches
   bool lost_ = false;
   const FocusStack* stack_ = nullptr;
+  ParticleRecovery* particles_ = nullptr;
   float depth_margin_ = 0.0f;  // this frame's measurement's (0 without one)
 };
 

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <memory>
+#include <optional>
 
 #include "gabarit/app/error.hpp"
 #include "gabarit/host/parallel_voter.hpp"
@@ -101,7 +103,19 @@ void run_tracking(const TableView& table, app::FrameSource& frames, const Pose& 
   app::GrayImage frame;
   app::TrackRow row;
   SessionResult result;
+  // The particle recovery stage, made at the first frame (its edge map is the frame's size).
+  std::unique_ptr<ParticleTracker> particles;
+  std::optional<ParticleRecovery> particle_recovery;
+  if (options.particle_recovery && !options.session.recover) throw app::Error("particle recovery needs recovery on");
+  if (options.particle_recovery && !valid(options.particle_recovery_options)) throw app::Error("particle recovery: invalid options");
   for (std::uint32_t index = 0; frames.next(frame); ++index) {
+    if (options.particle_recovery && !particles) {
+      particles = std::make_unique<ParticleTracker>(table, frame.width, frame.height, options.particles);
+      particles->start(init);
+      particle_recovery.emplace(table, options.detector ? *options.detector : detector_of(table), particles->filter(),
+                                options.particle_recovery_options);
+      session.use_particle_recovery(&*particle_recovery);
+    }
     const auto start = std::chrono::steady_clock::now();
     const Status status = session.step(frame.view(), scratch, result);
     const auto stop = std::chrono::steady_clock::now();

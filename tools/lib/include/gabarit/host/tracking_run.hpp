@@ -12,6 +12,8 @@
 #include "gabarit/app/image_io.hpp"
 #include "gabarit/app/pose_row.hpp"
 #include "gabarit/app/scratch.hpp"
+#include "gabarit/host/particle_run.hpp"
+#include "gabarit/particle_recovery.hpp"
 #include "gabarit/table_view.hpp"
 #include "gabarit/tracker.hpp"
 #include "gabarit/tracking_session.hpp"
@@ -44,6 +46,16 @@ struct TrackingOptions {
   // SessionScratch::search_features); false: a full track_step per placement,
   // as before (kept for the bench's comparison).
   bool shared_search_features = true;
+  // Re-acquire with the particle filter over the whole frame
+  // (particle_recovery.hpp) instead of the grid search; with recovery on.
+  bool particle_recovery = false;
+  ParticleRunOptions particles = recovery_particles();
+  ParticleRecoveryOptions particle_recovery_options;
+  static ParticleRunOptions recovery_particles() {
+    ParticleRunOptions o;
+    o.edge_tolerance = 0;
+    return o;
+  }
 };
 
 // Calls on_row for every frame. row.step is the frame's vote with the
