@@ -28,7 +28,7 @@ Status ParticleRecovery::run(const ImageView& image, const LastSighting& last, T
   float x0 = clip(cx - reach, w), x1 = clip(cx + reach, w), y0 = clip(cy - reach, h), y1 = clip(cy + reach, h);
   if (!(x0 < x1)) x0 = 0.0f, x1 = w;  // extrapolated off the frame: all of it
   if (!(y0 < y1)) y0 = 0.0f, y1 = h;
-  const float theta = last.pose.theta_deg;
+  const float theta = last.pose.theta_deg + last.motion.vtheta * n_since;
   GABARIT_TRY(filter_.scatter(x0, x1, y0, y1, theta - turn, theta + turn, frames_ == 0 ? 1.0f : options_.rescatter));
   ++frames_;
   ParticleEstimate estimate;

@@ -156,7 +156,8 @@ $g eval --gt "$s/gt.csv" --poses "$s/pr.csv" > "$s/acc_pr.json" || fail "eval --
 grep -q '"reacquired_after_frames": \[[0-9]' "$s/acc_pr.json" || fail "--recovery particle: not reacquired after the occlusion: $(cat "$s/acc_pr.json")"
 expect 2 "needs recovery" $g track --recovery particle --plain --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init"
 expect 2 "want grid or particle" $g track --recovery kalman --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init"
-expect 2 "applies to --tracker particle" $g track --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init" --particles 10
+expect 2 "applies to --tracker particle and --recovery particle" $g track --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init" --particles 10
+expect 2 "applies to --tracker particle" $g track --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init" --measure edges
 expect 2 "not --tracker particle" $g track --tracker particle --plain --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init"
 expect 2 "want stencil or particle" $g track --tracker kalman --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init"
 expect 2 "want edges or stencil" $g track --tracker particle --measure votes --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init"

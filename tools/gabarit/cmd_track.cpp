@@ -57,13 +57,15 @@ int track(const std::vector<std::string>& argv) {
               "                          (docs/particle-filter.md), whose best modes the table verifies"},
              {"--tracker", "stencil|particle", "stencil (default): the stencil session above; particle: the thesis's\n"
               "                          particle filter (chapter 3, docs/particle-filter.md) with the table's model"},
-             {"--particles", "N", "--tracker particle: particles, 1..1000000 (default 1000)"},
-             {"--seed", "S", "--tracker particle: the generator's seed (default 1); same seed, same output"},
+             {"--particles", "N", "--tracker particle, --recovery particle: particles, 1..1000000 (default 1000)"},
+             {"--seed", "S", "--tracker particle, --recovery particle: the generator's seed (default 1); same seed,\n"
+              "                          same output"},
              {"--measure", "edges|stencil", "--tracker particle: edge correlation over the table's model points\n"
               "                          (default), or the stencil vote of each particle's cell"},
-             {"--edge-stride", "N", "--measure edges: every N-th model point, 1..64 (default 2)"},
-             {"--edge-tolerance", "PX", "--measure edges: a point within PX pixels of an edge counts, 0..3 (default 0)"},
-             {"--without", "LIST", "--tracker particle: improvements to switch off, comma-separated: modes,\n"
+             {"--edge-stride", "N", "the particle filter's edge measure: every N-th model point, 1..64 (default 2)"},
+             {"--edge-tolerance", "PX", "the particle filter's edge measure: a point within PX pixels of an edge\n"
+              "                          counts, 0..3 (default 0)"},
+             {"--without", "LIST", "the particle filter's improvements to switch off, comma-separated: modes,\n"
               "                          disambiguation, narrowing, kinematics, reinit, mode-filter, velocity;\n"
               "                          all: plain CONDENSATION"},
              {"-o", "POSES.csv", "pose output (default stdout)"},
@@ -75,8 +77,11 @@ int track(const std::vector<std::string>& argv) {
   const std::string tracker = args.get_or("--tracker", "stencil");
   if (tracker != "stencil" && tracker != "particle") throw app::UsageError("--tracker '" + tracker + "': want stencil or particle");
   const bool particle = tracker == "particle";
-  for (const char* option : {"--particles", "--seed", "--measure", "--without", "--edge-stride", "--edge-tolerance"})
-    if (!particle && args.has(option)) throw app::UsageError(std::string(option) + " applies to --tracker particle");
+  const bool particle_recovery = args.get_or("--recovery", "grid") == "particle";
+  for (const char* option : {"--particles", "--seed", "--without", "--edge-stride", "--edge-tolerance"})
+    if (!particle && !particle_recovery && args.has(option))
+      throw app::UsageError(std::string(option) + " applies to --tracker particle and --recovery particle");
+  if (!particle && args.has("--measure")) throw app::UsageError("--measure applies to --tracker particle");
   if (particle) {
     for (const char* option : {"--plain", "--motion-filter", "--refine", "--recover", "--recovery", "--subcell", "--coarse", "--search-budget",
                                "--screen-stride", "--search-interval", "--threads", "--focus-stack", "--no-focus-stack"})
@@ -106,6 +111,12 @@ int track(const std::vector<std::string>& argv) {
     if (!options.session.recover) throw app::UsageError("--recovery particle needs recovery: drop --plain or add --recover");
     if (args.has("--coarse")) throw app::UsageError("--recovery particle replaces the --coarse search; give one of them");
     options.particle_recovery = true;
+    host::ParticleRunOptions& po = options.particles;
+    po.particles = static_cast<std::uint32_t>(args.integer("--particles", po.particles, 1, 1000000));
+    po.seed = static_cast<std::uint64_t>(args.integer("--seed", 1, 0, std::numeric_limits<std::int64_t>::max()));
+    po.edge_stride = static_cast<std::uint32_t>(args.integer("--edge-stride", po.edge_stride, 1, 64));
+    po.edge_tolerance = static_cast<std::uint32_t>(args.integer("--edge-tolerance", po.edge_tolerance, 0, 3));
+    if (args.has("--without")) host::switch_off_improvements(args.get("--without"), po.filter, "--without");
   } else if (recovery != "grid") {
     throw app::UsageError("--recovery '" + recovery + "': want grid or particle");
   }

@@ -8,8 +8,8 @@
 // the best edge correlation. The region is centred where the target would be
 // had it kept its last confident velocity (the grid search's first centre),
 // reach_px around it growing by growth_px per lost frame until it covers the
-// frame, and the last confident angle +- turn_deg (growing by growth_deg per
-// frame up to 180). The filter steps (its own measure, e.g. edge correlation over
+// frame, and the angle it would have turned to +- turn_deg (growing by
+// growth_deg per frame up to 180). The filter steps (its own measure, e.g. edge correlation over
 // the frame); its `candidates` heaviest modes are each voted by the fine
 // table from their pose, and the best of those votes is voted once more from
 // its own estimate: that vote is the stage's result, which the session
@@ -36,7 +36,7 @@ namespace gabarit {
 struct ParticleRecoveryOptions {
   float reach_px = 40.0f;         // the region's half-side on the first lost frame
   float growth_px = 10.0f;        // added per lost frame
-  float turn_deg = 10.0f;         // the angles searched: the last confident one +- this
+  float turn_deg = 10.0f;         // the angles searched: the extrapolated one +- this
   float growth_deg = 1.0f;        // added per lost frame
   float rescatter = 0.3f;         // the share of the cloud re-drawn over the frame each later lost frame, (0, 1]
   std::uint32_t candidates = 3;   // modes voted by the fine table, 1..kMaxParticleModes
