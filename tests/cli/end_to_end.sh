@@ -156,6 +156,9 @@ $g eval --gt "$s/gt.csv" --poses "$s/pr.csv" > "$s/acc_pr.json" || fail "eval --
 grep -q '"reacquired_after_frames": \[[0-9]' "$s/acc_pr.json" || fail "--recovery particle: not reacquired after the occlusion: $(cat "$s/acc_pr.json")"
 expect 2 "needs recovery" $g track --recovery particle --plain --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init"
 expect 2 "want grid or particle" $g track --recovery kalman --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init"
+$g synth --pipette-suite --scenes 1 --frames 3 -o "$work/pipettes" 2>/dev/null || fail "synth --pipette-suite"
+grep -q "^0,glass-pipette-gravel-smooth-cover-d1-s1001,tuning," "$work/pipettes/suite.csv" || fail "synth --pipette-suite: listing"
+expect 2 "want an integer in \[1, 8\]" $g synth --pipette-suite --scenes 9 -o "$work/pipettes9"
 expect 2 "applies to --tracker particle and --recovery particle" $g track --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init" --particles 10
 expect 2 "applies to --tracker particle" $g track --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init" --measure edges
 expect 2 "not --tracker particle" $g track --tracker particle --plain --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init"
@@ -176,7 +179,7 @@ expect 2 "--search-interval" $g track --table "$s/t.gbt" --frames "$s/frames.y4m
 expect 2 "--screen-stride" $g track --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init" --recover --screen-stride 17
 expect 2 "--search-budget" $g track --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init" --recover --search-budget 559
 expect 2 "applies to --scene" $g synth --shape curve --depths 3 -o "$work/x"
-expect 2 "one of --shape, --scene and --suite" $g synth -o "$work/x"
+expect 2 "one of --shape, --scene, --suite and --pipette-suite" $g synth -o "$work/x"
 expect 2 "--translations" $g tables build --model "$s/model_00.pgm" --x 0:0:1 --y 0:0:1 --translations middle -o "$work/x.gbt"
 
 # Hardening: outputs never clobber inputs or a previous output, inputs are

@@ -93,6 +93,54 @@ TEST(Evaluation, AngleDepthAndReacquisitionAreMeasured) {
 // scenes gives an object another motion; every object renders, with its
 // outline inside the model image, and a sliding occluder hides the object
 // for a middle stretch of frames, not from the first covered frame.
+TEST(PipetteScenes, AreTransparentChangeTheirLookAndSplitIntoHalves) {
+  std::uint32_t held_out = 0;
+  for (std::uint32_t i = 0; i < kPipetteScenes; ++i) {
+    const SceneOptions o = pipette_scene(i);
+    EXPECT_EQ(o.object, SceneObject::kGlassPipette);
+    EXPECT_NE(o.background, SceneBackground::kSmooth) << "in clutter";
+    EXPECT_NE(o.occlusion_side, OcclusionSide::kNone);
+    EXPECT_GT(o.blur_every, 0u);
+    held_out += pipette_held_out(i);
+  }
+  EXPECT_EQ(held_out, kPipetteScenes / 2);
+  // Over a smooth background, no occluder, no noise: the bore lets the
+  // background through (it differs from it by far less than the wall does),
+  // and the wall's contrast changes with the illumination's phase.
+  const auto dir = std::filesystem::temp_directory_path() / ("gabarit-pipette-test-" + std::to_string(::getpid()));
+  SceneOptions o;
+  o.object = SceneObject::kGlassPipette;
+  o.width = o.height = 0;
+  o.background = SceneBackground::kSmooth;
+  o.occlusion_side = OcclusionSide::kNone;
+  o.noise_sigma = 0;
+  o.illumination = 0;
+  o.blur_every = 0;
+  o.max_speed_px = 0;
+  o.max_turn_deg = 0;
+  o.frames = 68;
+  write_scene_sequence(o, dir.string());
+  const auto truth = read_pose_csv((dir / "gt.csv").string());
+  auto frames = app::open_frames((dir / "frames.y4m").string());
+  app::GrayImage f0, f, f67;
+  ASSERT_TRUE(frames->next(f0));
+  for (int i = 1; i < 68; ++i) ASSERT_TRUE(frames->next(i == 67 ? f67 : f));
+  const auto at = [](const app::GrayImage& g, double x, double y) {
+    return static_cast<int>(g.pixels[static_cast<std::size_t>(std::lround(y)) * g.width + static_cast<std::size_t>(std::lround(x))]);
+  };
+  // Along the axis (theta from the truth), the bore at the centre, the wall
+  // at the half-width (about 5.5 px there), the background 12 px out.
+  const double c = std::cos(truth[0].theta_deg * 3.14159265358979 / 180), s = std::sin(truth[0].theta_deg * 3.14159265358979 / 180);
+  const double x = truth[0].x, y = truth[0].y;
+  const auto across = [&](const app::GrayImage& g, double d) { return at(g, x - s * d, y + c * d); };
+  int wall0 = 255, wall67 = 255;
+  for (double d = 4.0; d <= 6.5; d += 0.5) wall0 = std::min(wall0, across(f0, d)), wall67 = std::min(wall67, across(f67, d));
+  const int bore = across(f0, 0), background = across(f0, 14);
+  EXPECT_LT(std::abs(bore - background), std::abs(wall0 - background)) << "the bore is transparent, the wall is not";
+  EXPECT_GT(std::abs(wall67 - wall0), 10) << "the wall's look changes with the illumination's phase";
+  std::filesystem::remove_all(dir);
+}
+
 TEST(SceneSuite, MixesObjectsMotionsAndHalvesAndEveryObjectRenders) {
   int per_half[2][8] = {};
   for (std::uint32_t i = 0; i < kSuiteScenes; ++i) {
@@ -108,7 +156,7 @@ TEST(SceneSuite, MixesObjectsMotionsAndHalvesAndEveryObjectRenders) {
 
   const auto dir = std::filesystem::temp_directory_path() / ("gabarit-suite-test-" + std::to_string(::getpid()));
   for (const SceneObject object : {SceneObject::kCog, SceneObject::kCoin, SceneObject::kHorse, SceneObject::kPipette, SceneObject::kCat,
-                                   SceneObject::kAstronaut, SceneObject::kCup, SceneObject::kLarge}) {
+                                   SceneObject::kAstronaut, SceneObject::kCup, SceneObject::kLarge, SceneObject::kGlassPipette}) {
     SceneOptions o;
     o.object = object;
     o.width = o.height = 0;

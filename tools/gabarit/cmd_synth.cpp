@@ -58,21 +58,25 @@ int synth_scene(const app::Args& args) {
   return 0;
 }
 
-// The scene suite: DIR/NN/ per scene and DIR/suite.csv listing them.
-int synth_suite(const app::Args& args) {
+// The scene suite (or the pipette scenes): DIR/NN/ per scene and
+// DIR/suite.csv listing them.
+int synth_suite(const app::Args& args, bool pipette) {
+  const char* option = pipette ? "--pipette-suite" : "--suite";
   for (const char* other : {"--points", "--max-step", "--noise", "--depths", "--occlusion", "--size", "--seed", "--background",
                             "--motion", "--occlusion-side", "--stack"})
-    if (args.has(other)) throw app::UsageError(std::string(other) + " does not apply to --suite (its scenes are fixed)");
-  const auto count = static_cast<std::uint32_t>(args.integer("--scenes", host::kSuiteScenes, 1, 1000));
-  const auto frames = static_cast<std::uint32_t>(args.integer("--frames", 160, 1, 100000));
+    if (args.has(other)) throw app::UsageError(std::string(other) + " does not apply to " + option + " (its scenes are fixed)");
+  const std::uint32_t all = pipette ? host::kPipetteScenes : host::kSuiteScenes;
+  const auto count = static_cast<std::uint32_t>(args.integer("--scenes", all, 1, pipette ? all : 1000));
+  const auto frames = static_cast<std::uint32_t>(args.integer("--frames", pipette ? 200 : 160, 1, 100000));
   const std::filesystem::path dir(args.get("-o"));
   std::string listing = "index,name,half,object,background,motion,occlusion_side,depths,stack,seed,frames,visible,width,height\n";
   for (std::uint32_t i = 0; i < count; ++i) {
-    const host::SceneOptions o = host::suite_scene(i, frames);
+    const host::SceneOptions o = pipette ? host::pipette_scene(i, frames) : host::suite_scene(i, frames);
+    const bool held_out = pipette ? host::pipette_held_out(i) : host::suite_held_out(i);
     char sub[16];
     std::snprintf(sub, sizeof sub, "%02u", i);
     const host::SceneSummary s = host::write_scene_sequence(o, (dir / sub).string());
-    listing += std::to_string(i) + "," + host::scene_name(o) + "," + (host::suite_held_out(i) ? "held-out" : "tuning") + "," +
+    listing += std::to_string(i) + "," + host::scene_name(o) + "," + (held_out ? "held-out" : "tuning") + "," +
                host::name_of(o.object) + "," + host::name_of(o.background) + "," + host::name_of(o.motion) + "," +
                host::name_of(o.occlusion_side) + "," + std::to_string(o.depths) + "," + host::name_of(o.stack) + "," +
                std::to_string(o.seed) + "," + std::to_string(o.frames) + "," + std::to_string(s.visible_frames) + "," +
@@ -87,7 +91,7 @@ int synth_suite(const app::Args& args) {
 }  // namespace
 
 int synth(const std::vector<std::string>& argv) {
-  app::Args args("synth", "(--shape SRC --frames N --max-step PX --noise P | --scene OBJECT [--depths N] | --suite) --seed S -o DIR",
+  app::Args args("synth", "(--shape SRC --frames N --max-step PX --noise P | --scene OBJECT [--depths N] | --suite | --pipette-suite) --seed S -o DIR",
             "--shape: a synthetic sequence of the thesis (section 6.2): a point shape translated over an empty\n"
             "image by a random displacement within +-PX per axis and frame, with salt-and-pepper noise of rate P.\n"
             "Outputs DIR/frames.y4m (Cmono), DIR/gt.csv (frame,x,y,theta_deg,depth,visible), DIR/model.csv\n"
@@ -97,7 +101,8 @@ int synth(const std::vector<std::string>& argv) {
             "background, with an illumination change, sensor noise, motion-blurred frames and an occlusion.\n"
             "Outputs DIR/frames.y4m, DIR/gt.csv and the model stack DIR/model_NN.pgm. Deterministic per seed.\n"
             "--scene OBJECT: the same with another object, background, motion and occlusion (docs/scene-suite.md).\n"
-            "--suite: the scene suite, DIR/00 .. DIR/31 (half for tuning, half held out) and DIR/suite.csv.",
+            "--suite: the scene suite, DIR/00 .. DIR/31 (half for tuning, half held out) and DIR/suite.csv.\n"
+            "--pipette-suite: the 8 glass-pipette scenes of gabarit bench --pipette (docs/particle-filter.md).",
             {{"--shape", "SRC", "random | curve (thesis ~194 points) | watch (~2800 edge points of a Debian\n"
               "                          photograph) | photo:FILE.pgm | points CSV (x,y relative to the reference)"},
              {"--scene", "OBJECT", "the grayscale 4-DOF scene instead of a point shape: microscope (the cog over\n"
@@ -110,21 +115,24 @@ int synth(const std::vector<std::string>& argv) {
              {"--occlusion-side", "SIDE", "--scene: cover (default: all at once), left, right, top, bottom (sliding in), none"},
              {"--stack", "KIND", "--scene: tilted (default: no two depths alike) or alike (two middle depths nearly equal)"},
              {"--suite", "", "the scene suite (fixed scenes; --frames and --scenes apply)"},
+             {"--pipette-suite", "", "the glass-pipette scenes (fixed; 0-3 tuning, 4-7 held out; --frames, default 200,\n"
+              "                          and --scenes apply)"},
              {"--scenes", "N", "--suite: the first N scenes (default 32)"},
              {"--depths", "N", "--scene: focus-stack depths of the tilted object, 1..32 (default 1)"},
              {"--occlusion", "START:FRAMES", "--scene: frames hidden behind another photograph (default 100:18; 0:0 none)"},
              {"--points", "N", "approximate point count for random (default 194) and photo: (default 2800)"},
-             {"--frames", "N", "frame count (default 100; --scene: 240; --suite: 160)"},
+             {"--frames", "N", "frame count (default 100; --scene: 240; --suite: 160; --pipette-suite: 200)"},
              {"--max-step", "PX", "largest displacement per axis and frame (default 4)"},
              {"--noise", "P", "salt-and-pepper rate in [0,1] (default 0)"},
              {"--seed", "S", "seed (default 1)"},
              {"--size", "WxH", "image size (default: 256x256, larger if the shape needs it)"},
              {"-o", "DIR", "output directory", false, true}});
   if (!args.parse(argv)) return 0;
-  if (int{args.has("--scene")} + int{args.has("--shape")} + int{args.has("--suite")} != 1)
-    throw app::UsageError("give one of --shape, --scene and --suite");
-  if (args.has("--scenes") && !args.has("--suite")) throw app::UsageError("--scenes applies to --suite");
-  if (args.has("--suite")) return synth_suite(args);
+  if (int{args.has("--scene")} + int{args.has("--shape")} + int{args.has("--suite")} + int{args.has("--pipette-suite")} != 1)
+    throw app::UsageError("give one of --shape, --scene, --suite and --pipette-suite");
+  if (args.has("--scenes") && !args.has("--suite") && !args.has("--pipette-suite"))
+    throw app::UsageError("--scenes applies to --suite and --pipette-suite");
+  if (args.has("--suite") || args.has("--pipette-suite")) return synth_suite(args, args.has("--pipette-suite"));
   if (args.has("--scene")) return synth_scene(args);
   for (const char* scene_only : {"--depths", "--occlusion", "--background", "--occlusion-side", "--stack"})
     if (args.has(scene_only)) throw app::UsageError(std::string(scene_only) + " applies to --scene");
