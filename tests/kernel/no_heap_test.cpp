@@ -199,12 +199,13 @@ int main() {
     for (int i = 0; i < 3 && ok; ++i) ok = aligned.step(view, {scratch, {}}, r) == Status::kOk;
     return ok;
   });
+  // The particle filter's memory, static as on an MCU.
+  static std::uint64_t bits[edge_map_words(64, 64)];
+  static RoiPoint strip[64 * 4];
+  static Particle cloud[256], next[256];
+  static std::uint32_t order[512];
   // The particle filter with both measures, every improvement on, a scatter and lost frames.
   {
-    static std::uint64_t bits[edge_map_words(64, 64)];
-    static RoiPoint strip[64 * 4];
-    static Particle cloud[256], next[256];
-    static std::uint32_t order[512];
     EdgeMapLoader loader(detector_of(table), bits, strip, 64, 64);
     EdgeCorrelationMeasure edges(table, loader, 2, 0), fine(table, loader, 1, 0);
     StencilVoteMeasure stencil(table, detector_of(table), scratch);
@@ -223,10 +224,6 @@ int main() {
   }
   // A session re-acquiring through the particle filter.
   {
-    static std::uint64_t bits[edge_map_words(64, 64)];
-    static RoiPoint strip[64 * 4];
-    static Particle cloud[256], next[256];
-    static std::uint32_t order[512];
     EdgeMapLoader loader(detector_of(table), bits, strip, 64, 64);
     EdgeCorrelationMeasure edges(table, loader, 2, 0), fine(table, loader, 1, 0);
     ParticleFilter filter(ParticlePolicies{&loader, &edges, &fine});

@@ -25,8 +25,8 @@
 //   modes (3.5.3): sorted by weight (LSD radix sort, O(n)), then one pass
 //     assigns each particle to the first of at most kMaxParticleModes modes
 //     whose seed (its heaviest particle) is within the mode radius
-//     ((dx^2 + dy^2) / r_px^2 + dtheta^2 / r_deg^2 <= 1, same depth), else
-//     seeds a new mode: O(n kMaxParticleModes) = O(n);
+//     ((dx^2 + dy^2) / r_px^2 + dtheta^2 / r_deg^2 <= 1, same depth), or
+//     else seeds a mode of its own: O(n kMaxParticleModes) = O(n);
 //   disambiguation (3.5.4): the heaviest disambiguate_modes modes scored
 //     again by the finer measure; the best of those is the best mode;
 //   narrowing (3.6.1): the diffusion's sigma scales from 1 (no confidence)
