@@ -154,12 +154,11 @@ void sort_by_weight(std::span<const Particle> particles, std::span<std::uint32_t
   // Four passes: the result is back in order[0, n).
 }
 
-void ModeAnalysis::analyse(std::span<const Particle> particles, std::span<std::uint32_t> order, const ParticleContext& context,
-                           ParticleMeasure* finer, std::span<ParticleMode> modes, ParticleAnalysisResult& out) noexcept {
+std::uint32_t ModeAnalysis::cluster(std::span<const Particle> particles, std::span<std::uint32_t> order,
+                                    const ParticleContext& context, std::span<ParticleMode> modes) noexcept {
   const ParticleFilterOptions& o = *context.options;
   const auto n = static_cast<std::uint32_t>(particles.size());
-  out = {};
-  if (n == 0 || modes.empty()) return;
+  if (n == 0 || modes.empty()) return 0;
   float total = 0.0f;
   for (const Particle& p : particles) total += p.weight;
   const float inv_total = total > 0.0f ? 1.0f / total : 0.0f;
@@ -212,6 +211,7 @@ void ModeAnalysis::analyse(std::span<const Particle> particles, std::span<std::u
     ParticleMode& mode = modes[m];
     mode.particles = s.count;
     mode.weight = s.w * inv_total;
+    mode.score = -1.0f;
     if (s.w > 0.0f) {
       const float iw = 1.0f / s.w;
       mode.pose = {s.x * iw, s.y * iw, s.seed.theta_deg + s.t * iw, s.seed.depth};
@@ -226,12 +226,19 @@ void ModeAnalysis::analyse(std::span<const Particle> particles, std::span<std::u
     for (; j > 0 && modes[j - 1].weight < m.weight; --j) modes[j] = modes[j - 1];
     modes[j] = m;
   }
+  return mode_count;
+}
+
+void ModeAnalysis::choose(std::span<const ParticleMode> modes, std::uint32_t scored, const ParticleContext& context,
+                          ParticleAnalysisResult& out) noexcept {
+  const ParticleFilterOptions& o = *context.options;
+  const auto mode_count = static_cast<std::uint32_t>(modes.size());
+  out = {};
   out.modes = mode_count;
-  // Scores: the finer measure's on the modes it disambiguates (the
-  // heaviest), else each mode's weight share stands for it.
-  const bool disambiguate = o.disambiguate && finer != nullptr;
-  const std::uint32_t scored = disambiguate ? (o.disambiguate_modes < mode_count ? o.disambiguate_modes : mode_count) : 0;
-  for (std::uint32_t m = 0; m < mode_count; ++m) modes[m].score = m < scored ? finer->score(modes[m].pose) : -1.0f;
+  if (mode_count == 0) return;
+  if (scored > mode_count) scored = mode_count;
+  // The first `scored` modes (the heaviest) carry the finer measure's score
+  // and rank by it; the rest rank after them, by weight.
   const auto better = [&](std::uint32_t a, std::uint32_t b) {  // a ranks before b
     if (a < scored && b < scored && modes[a].score != modes[b].score) return modes[a].score > modes[b].score;
     if ((a < scored) != (b < scored)) return a < scored;
@@ -241,7 +248,7 @@ void ModeAnalysis::analyse(std::span<const Particle> particles, std::span<std::u
   for (std::uint32_t m = 1; m < mode_count; ++m)
     if (better(m, best)) best = m;
   out.best = out.chosen = best;
-  if (!o.mode_filter || context.lost || mode_count == 0) return;
+  if (!o.mode_filter || context.lost) return;
   // Mode filtering: the best mode within the adaptive distance of the prediction.
   const auto magnitude = [](float v) { return v < 0.0f ? -v : v; };
   float reach = o.mode_filter_px + magnitude(context.vx) + magnitude(context.vy);  // the speed's L1 norm bounds |v|
@@ -260,16 +267,10 @@ void ModeAnalysis::analyse(std::span<const Particle> particles, std::span<std::u
   }
 }
 
-ParticleFilter::ParticleFilter(const ParticlePolicies& policies) noexcept : policies_(policies) {
-  if (policies_.propagation == nullptr) policies_.propagation = &default_propagation_;
-  if (policies_.compensation == nullptr) policies_.compensation = &default_compensation_;
-  if (policies_.analysis == nullptr) policies_.analysis = &default_analysis_;
-}
-
-Status ParticleFilter::start(const ParticleFilterOptions& options, const Pose& initial, std::uint16_t depth_count,
+Status ParticleFilterCore::start(const ParticleFilterOptions& options, const Pose& initial, std::uint16_t depth_count,
                              std::uint64_t seed, ParticleScratch scratch) noexcept {
   started_ = false;
-  if (!valid(options) || policies_.measure == nullptr || !finite_pose(initial) || depth_count == 0 ||
+  if (!valid(options) || !finite_pose(initial) || depth_count == 0 ||
       initial.depth >= depth_count)
     return Status::kInvalidArgument;
   const std::size_t n = scratch.cloud.size();
@@ -308,14 +309,14 @@ Status ParticleFilter::start(const ParticleFilterOptions& options, const Pose& i
   return Status::kOk;
 }
 
-void ParticleFilter::reinitialise_around(const Pose& pose, float fraction) noexcept {
+void ParticleFilterCore::reinitialise_around(const Pose& pose, float fraction) noexcept {
   if (!finite_pose(pose) || !(fraction > 0.0f)) return;
   external_reinit_ = pose;
   if (external_reinit_.depth >= context_.depth_count) external_reinit_.depth = static_cast<std::uint16_t>(context_.depth_count - 1);
   external_fraction_ = fraction > 1.0f ? 1.0f : fraction;
 }
 
-void ParticleFilter::draw_uniform(Particle& p, const float* r) noexcept {
+void ParticleFilterCore::draw_uniform(Particle& p, const float* r) noexcept {
   p.pose.x = r[0] + (r[1] - r[0]) * rng_.uniform();
   p.pose.y = r[2] + (r[3] - r[2]) * rng_.uniform();
   p.pose.theta_deg = r[4] + (r[5] - r[4]) * rng_.uniform();
@@ -324,7 +325,7 @@ void ParticleFilter::draw_uniform(Particle& p, const float* r) noexcept {
   p.weight = 1.0f / static_cast<float>(cloud_.size());
 }
 
-Status ParticleFilter::scatter(float x0, float x1, float y0, float y1, float theta0_deg, float theta1_deg,
+Status ParticleFilterCore::scatter(float x0, float x1, float y0, float y1, float theta0_deg, float theta1_deg,
                                float fraction) noexcept {
   if (!started_) return Status::kInvalidArgument;
   const auto ordered = [](float a, float b) { return within_limit(a, kPoseLimit) && within_limit(b, kPoseLimit) && a <= b; };
@@ -343,7 +344,7 @@ Status ParticleFilter::scatter(float x0, float x1, float y0, float y1, float the
   return Status::kOk;
 }
 
-Status ParticleFilter::step(const ImageView& image, ParticleEstimate& out) noexcept {
+Status ParticleFilterCore::begin_step(const ImageView& image, ParticleEstimate& out) noexcept {
   if (!started_ || !image.valid()) return Status::kInvalidArgument;
   out = {};
   const ParticleFilterOptions& o = options_;
@@ -368,12 +369,17 @@ Status ParticleFilter::step(const ImageView& image, ParticleEstimate& out) noexc
     c.reinit_centre = last_confident_;
     c.reinit_fraction = o.reinit_fraction;
   }
+  c.unconfident_frames = unconfident_;
+  c.held_frames = held_;
+  return Status::kOk;
+}
+
+void ParticleFilterCore::after_propagation(ParticleEstimate& out) noexcept {
   if (!scattered_) {
-    policies_.propagation->propagate(cloud_, next_, c, rng_);
     const std::span<Particle> t = cloud_;
     cloud_ = next_;
     next_ = t;
-    out.reinitialised = c.reinit_fraction > 0.0f;
+    out.reinitialised = context_.reinit_fraction > 0.0f;
     if (scatter_fraction_ > 0.0f) {
       // A partial scatter: every k-th particle re-drawn over the region
       // (spread over the cloud, which propagation leaves in picking order).
@@ -381,58 +387,46 @@ Status ParticleFilter::step(const ImageView& image, ParticleEstimate& out) noexc
       auto count = static_cast<std::uint32_t>(scatter_fraction_ * static_cast<float>(n) + 0.5f);
       if (count > n) count = n;
       for (std::uint32_t k = 0; k < count; ++k) draw_uniform(cloud_[static_cast<std::size_t>(k) * n / count], scatter_);
-      scatter_fraction_ = 0.0f;
       out.reinitialised = true;
     }
   }
   scatter_fraction_ = 0.0f;
   scattered_ = false;
+}
 
-  // Image loading over the particles' window plus the measure's reach.
-  ParticleMeasure& measure = *policies_.measure;
-  if (policies_.loader != nullptr) {
-    float x_lo = cloud_[0].pose.x, x_hi = x_lo, y_lo = cloud_[0].pose.y, y_hi = y_lo;
-    for (const Particle& p : cloud_) {
-      x_lo = p.pose.x < x_lo ? p.pose.x : x_lo, x_hi = p.pose.x > x_hi ? p.pose.x : x_hi;
-      y_lo = p.pose.y < y_lo ? p.pose.y : y_lo, y_hi = p.pose.y > y_hi ? p.pose.y : y_hi;
-    }
-    std::uint32_t reach = measure.reach_px();
-    if (policies_.finer != nullptr && policies_.finer->reach_px() > reach) reach = policies_.finer->reach_px();
-    const float r = static_cast<float>(reach) + 1.0f;
-    const auto clip = [](float v, float hi) { return v < 0.0f ? 0.0f : v > hi ? hi : v; };
-    const float w = static_cast<float>(image.width), h = static_cast<float>(image.height);
-    const float wx0 = clip(x_lo - r, w), wx1 = clip(x_hi + r + 1.0f, w), wy0 = clip(y_lo - r, h), wy1 = clip(y_hi + r + 1.0f, h);
-    ImageWindow window;
-    window.x0 = static_cast<std::int32_t>(wx0);
-    window.y0 = static_cast<std::int32_t>(wy0);
-    const auto extent = [](float a, float b) {
-      const float d = b - a;
-      return static_cast<std::uint16_t>(d >= 65535.0f ? 65535.0f : d < 0.0f ? 0.0f : d);
-    };
-    window.width = extent(static_cast<float>(window.x0), wx1);
-    window.height = extent(static_cast<float>(window.y0), wy1);
-    GABARIT_TRY(policies_.loader->load(image, window));
+ImageWindow ParticleFilterCore::loader_window(const ImageView& image, std::uint32_t reach) const noexcept {
+  float x_lo = cloud_[0].pose.x, x_hi = x_lo, y_lo = cloud_[0].pose.y, y_hi = y_lo;
+  for (const Particle& p : cloud_) {
+    x_lo = p.pose.x < x_lo ? p.pose.x : x_lo, x_hi = p.pose.x > x_hi ? p.pose.x : x_hi;
+    y_lo = p.pose.y < y_lo ? p.pose.y : y_lo, y_hi = p.pose.y > y_hi ? p.pose.y : y_hi;
   }
-  GABARIT_TRY(measure.prepare(image, c.predicted));
-  if (policies_.finer != nullptr && policies_.finer != policies_.measure) GABARIT_TRY(policies_.finer->prepare(image, c.predicted));
-  measure.weigh(cloud_);
+  const float r = static_cast<float>(reach) + 1.0f;
+  const auto clip = [](float v, float hi) { return v < 0.0f ? 0.0f : v > hi ? hi : v; };
+  const float w = static_cast<float>(image.width), h = static_cast<float>(image.height);
+  const float wx0 = clip(x_lo - r, w), wx1 = clip(x_hi + r + 1.0f, w), wy0 = clip(y_lo - r, h), wy1 = clip(y_hi + r + 1.0f, h);
+  ImageWindow window;
+  window.x0 = static_cast<std::int32_t>(wx0);
+  window.y0 = static_cast<std::int32_t>(wy0);
+  const auto extent = [](float a, float b) {
+    const float d = b - a;
+    return static_cast<std::uint16_t>(d >= 65535.0f ? 65535.0f : d < 0.0f ? 0.0f : d);
+  };
+  window.width = extent(static_cast<float>(window.x0), wx1);
+  window.height = extent(static_cast<float>(window.y0), wy1);
+  return window;
+}
+
+void ParticleFilterCore::sharpen() noexcept {
   for (Particle& p : cloud_) {
     const float s = p.weight > 0.0f ? (p.weight < 1.0f ? p.weight : 1.0f) : 0.0f;
-    p.weight = power(s, o.sharpness);
+    p.weight = power(s, options_.sharpness);
   }
-  policies_.compensation->compensate(cloud_, c);
-  c.unconfident_frames = unconfident_;
-  c.held_frames = held_;
-  ParticleAnalysisResult analysis;
-  policies_.analysis->analyse(cloud_, order_, c, policies_.finer, {modes_, kMaxParticleModes}, analysis);
-  mode_count_ = analysis.modes;
-  out.modes = analysis.modes;
-  if (analysis.modes == 0) return Status::kOk;  // unreachable with the default analysis (n >= 1)
+}
 
-  ParticleMode& chosen = modes_[analysis.chosen];
-  ParticleMeasure& scorer = policies_.finer != nullptr ? *policies_.finer : measure;
-  if (chosen.score < 0.0f) chosen.score = scorer.score(chosen.pose);
-  const float score = chosen.score;
+void ParticleFilterCore::finish_step(const ParticleAnalysisResult& analysis, float score, ParticleEstimate& out) noexcept {
+  const ParticleFilterOptions& o = options_;
+  ParticleContext& c = context_;
+  const ParticleMode& chosen = modes_[analysis.chosen];
   if (reference_ <= 0.0f && score > 0.0f) reference_ = score;
   const float ratio = reference_ > 0.0f ? score / reference_ : 0.0f;
   out.score = score;
@@ -469,7 +463,6 @@ Status ParticleFilter::step(const ImageView& image, ParticleEstimate& out) noexc
   }
   out.pose = c.estimate;
   out.confidence = c.confidence;
-  return Status::kOk;
 }
 
 }  // namespace gabarit

@@ -209,9 +209,8 @@ int main() {
     EdgeMapLoader loader(detector_of(table), bits, strip, 64, 64);
     EdgeCorrelationMeasure edges(table, loader, 2, 0), fine(table, loader, 1, 0);
     StencilVoteMeasure stencil(table, detector_of(table), scratch);
-    for (ParticleMeasure* measure : {static_cast<ParticleMeasure*>(&edges), static_cast<ParticleMeasure*>(&stencil)}) {
-      ParticleFilter filter(ParticlePolicies{&loader, measure, &fine});
-      expect_no_allocation(measure == &edges ? "particle filter, edge measure" : "particle filter, stencil measure", [&] {
+    const auto run = [&](const char* name, auto& filter) {
+      expect_no_allocation(name, [&] {
         ParticleEstimate e;
         bool ok = filter.start(ParticleFilterOptions{}, Pose{32, 32, 0, 0}, table.depth_count(), 7, {cloud, next, order}) == Status::kOk;
         for (int i = 0; i < 3 && ok; ++i) ok = filter.step(view, e) == Status::kOk;
@@ -220,13 +219,17 @@ int main() {
         filter.reinitialise_around(Pose{32, 32, 0, 0}, 0.5f);
         return ok && filter.step(view, e) == Status::kOk;
       });
-    }
+    };
+    EdgeParticleFilter with_edges(edges, &fine, &loader);
+    run("particle filter, edge measure", with_edges);
+    ParticleFilter<StencilVoteMeasure, EdgeCorrelationMeasure, EdgeMapLoader> with_votes(stencil, &fine, &loader);
+    run("particle filter, stencil measure", with_votes);
   }
   // A session re-acquiring through the particle filter.
   {
     EdgeMapLoader loader(detector_of(table), bits, strip, 64, 64);
     EdgeCorrelationMeasure edges(table, loader, 2, 0), fine(table, loader, 1, 0);
-    ParticleFilter filter(ParticlePolicies{&loader, &edges, &fine});
+    EdgeParticleFilter filter(edges, &fine, &loader);
     ParticleRecovery stage(table, detector_of(table), filter);
     TrackingSession with_particles(table, nullptr, detector_of(table));
     with_particles.use_particle_recovery(&stage);

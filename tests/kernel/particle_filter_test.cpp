@@ -170,34 +170,37 @@ RunResult run(const Scene& s, Which which, const ParticleFilterOptions& o, std::
   EdgeCorrelationMeasure coarse(s.table, loader, 2, 1), fine(s.table, loader, 1, 1);
   testing::TrackerTestScratch scratch(s.table);
   StencilVoteMeasure stencil(s.table, detector_of(s.table), scratch.view());
-  ParticlePolicies policies;
-  policies.loader = &loader;
-  policies.measure = which == Which::kEdges ? static_cast<ParticleMeasure*>(&coarse) : &stencil;
-  policies.finer = &fine;
-  ParticleFilter filter(policies);
-  std::vector<Particle> cloud(particles), next(particles);
-  std::vector<std::uint32_t> order(2 * particles);
-  float x = 80, y = 80, theta = 0;
-  EXPECT_EQ(filter.start(o, {x, y, theta, 0}, 1, seed, {cloud, next, order}), Status::kOk);
-  host::Rng noise(seed + 100);
-  RunResult r;
-  std::uint32_t crc = 0;
-  for (int f = 0; f < frames; ++f) {
-    x += 1.5f * sin_cos_deg(11.459156f * static_cast<float>(f)).sin, y += 1.2f, theta += 0.5f;  // the kernel's sine: the same path everywhere
-    const GrayImage g = s.frame(x, y, theta, &noise, 0.03);
-    ParticleEstimate e;
-    EXPECT_EQ(filter.step(g.view(), e), Status::kOk);
-    const std::uint32_t bits[4] = {std::bit_cast<std::uint32_t>(e.pose.x), std::bit_cast<std::uint32_t>(e.pose.y),
-                                   std::bit_cast<std::uint32_t>(e.pose.theta_deg), e.pose.depth};
-    crc = crc32c_update(crc, std::as_bytes(std::span(bits)));
-    if (f >= 3) {  // the first frames converge
-      r.worst_px = std::max(r.worst_px, std::hypot(e.pose.x - x, e.pose.y - y));
-      r.worst_deg = std::max(r.worst_deg, std::fabs(e.pose.theta_deg - theta));
+  const auto loop = [&](auto& filter) {
+    std::vector<Particle> cloud(particles), next(particles);
+    std::vector<std::uint32_t> order(2 * particles);
+    float x = 80, y = 80, theta = 0;
+    EXPECT_EQ(filter.start(o, {x, y, theta, 0}, 1, seed, {cloud, next, order}), Status::kOk);
+    host::Rng noise(seed + 100);
+    RunResult r;
+    std::uint32_t crc = 0;
+    for (int f = 0; f < frames; ++f) {
+      x += 1.5f * sin_cos_deg(11.459156f * static_cast<float>(f)).sin, y += 1.2f, theta += 0.5f;  // the kernel's sine: the same path everywhere
+      const GrayImage g = s.frame(x, y, theta, &noise, 0.03);
+      ParticleEstimate e;
+      EXPECT_EQ(filter.step(g.view(), e), Status::kOk);
+      const std::uint32_t bits[4] = {std::bit_cast<std::uint32_t>(e.pose.x), std::bit_cast<std::uint32_t>(e.pose.y),
+                                     std::bit_cast<std::uint32_t>(e.pose.theta_deg), e.pose.depth};
+      crc = crc32c_update(crc, std::as_bytes(std::span(bits)));
+      if (f >= 3) {  // the first frames converge
+        r.worst_px = std::max(r.worst_px, std::hypot(e.pose.x - x, e.pose.y - y));
+        r.worst_deg = std::max(r.worst_deg, std::fabs(e.pose.theta_deg - theta));
+      }
+      r.tracking += e.state == TrackState::kTracking;
     }
-    r.tracking += e.state == TrackState::kTracking;
+    r.crc = crc;
+    return r;
+  };
+  if (which == Which::kEdges) {
+    ParticleFilter<EdgeCorrelationMeasure, EdgeCorrelationMeasure, EdgeMapLoader> filter(coarse, &fine, &loader);
+    return loop(filter);
   }
-  r.crc = crc;
-  return r;
+  ParticleFilter<StencilVoteMeasure, EdgeCorrelationMeasure, EdgeMapLoader> filter(stencil, &fine, &loader);
+  return loop(filter);
 }
 
 TEST(ParticleFilter, TracksAMovingModelWithEitherMeasure) {
@@ -241,7 +244,9 @@ TEST(ParticleFilter, ClustersSeparatedParticlesIntoModesHeaviestFirst) {
   ParticleMode modes[kMaxParticleModes];
   ParticleAnalysisResult r;
   ModeAnalysis analysis;
-  analysis.analyse(ps, order, c, nullptr, modes, r);
+  std::uint32_t count = analysis.cluster(ps, order, c, modes);
+  analysis.choose(std::span(modes, count), 0, c, r);
+  ASSERT_EQ(count, 3u);
   ASSERT_EQ(r.modes, 3u);
   EXPECT_EQ(modes[0].particles, 30u);  // weight 30 of 50.5
   EXPECT_NEAR(modes[0].weight, 30.0 / 50.5, 1e-6);
@@ -252,25 +257,35 @@ TEST(ParticleFilter, ClustersSeparatedParticlesIntoModesHeaviestFirst) {
   EXPECT_EQ(r.best, 0u);
   // At most max_modes: the rest belong to none.
   o.max_modes = 1;
-  analysis.analyse(ps, order, c, nullptr, modes, r);
-  EXPECT_EQ(r.modes, 1u);
+  count = analysis.cluster(ps, order, c, modes);
+  EXPECT_EQ(count, 1u);
   EXPECT_EQ(modes[0].particles, 10u);  // the heaviest particle seeds the one mode
 }
 
-// A finer measure that prefers one place.
-class PrefersX final : public ParticleMeasure {
+// A finer measure that prefers one place (a measure is any type with these members).
+class PrefersX {
  public:
   explicit PrefersX(float x) : x_(x) {}
-  Status prepare(const ImageView&, const Pose&) noexcept override { return Status::kOk; }
-  void weigh(std::span<Particle> ps) noexcept override {
+  Status prepare(const ImageView&, const Pose&) noexcept { return Status::kOk; }
+  void weigh(std::span<Particle> ps) noexcept {
     for (Particle& p : ps) p.weight = score(p.pose);
   }
-  float score(const Pose& p) noexcept override { return std::fabs(p.x - x_) < 1 ? 0.9f : 0.2f; }
-  std::uint32_t reach_px() const noexcept override { return 0; }
+  float score(const Pose& p) noexcept { return std::fabs(p.x - x_) < 1 ? 0.9f : 0.2f; }
+  std::uint32_t reach_px() const noexcept { return 0; }
 
  private:
   float x_;
 };
+
+// Result analysis as ParticleFilter::step runs it: cluster, the finer
+// measure's scores on the heaviest modes (with disambiguation), choose.
+void analyse(ModeAnalysis& analysis, std::span<const Particle> ps, std::span<std::uint32_t> order, const ParticleContext& c,
+             PrefersX& finer, ParticleMode (&modes)[kMaxParticleModes], ParticleAnalysisResult& r) {
+  const std::uint32_t count = analysis.cluster(ps, order, c, modes);
+  const std::uint32_t scored = c.options->disambiguate ? std::min(c.options->disambiguate_modes, count) : 0;
+  for (std::uint32_t m = 0; m < count; ++m) modes[m].score = m < scored ? finer.score(modes[m].pose) : -1.0f;
+  analysis.choose(std::span(modes, count), scored, c, r);
+}
 
 TEST(ParticleFilter, DisambiguationAndModeFilteringChooseTheRightMode) {
   ParticleFilterOptions o;
@@ -286,25 +301,25 @@ TEST(ParticleFilter, DisambiguationAndModeFilteringChooseTheRightMode) {
   PrefersX finer(40);
   c.predicted = {38, 10, 0, 0};
   o.mode_filter = false;
-  analysis.analyse(ps, order, c, &finer, modes, r);
+  analyse(analysis, ps, order, c, finer, modes, r);
   EXPECT_EQ(modes[r.best].pose.x, 40.0f) << "the finer measure overrules the weights";
   o.disambiguate = false;
-  analysis.analyse(ps, order, c, &finer, modes, r);
+  analyse(analysis, ps, order, c, finer, modes, r);
   EXPECT_EQ(modes[r.chosen].pose.x, 10.0f) << "without it, the heaviest";
   o.mode_filter = true;
-  analysis.analyse(ps, order, c, &finer, modes, r);
+  analyse(analysis, ps, order, c, finer, modes, r);
   EXPECT_EQ(modes[r.chosen].pose.x, 40.0f) << "mode filtering keeps the mode near the prediction";
   EXPECT_FALSE(r.held);
   c.predicted = {100, 100, 0, 0};
-  analysis.analyse(ps, order, c, &finer, modes, r);
+  analyse(analysis, ps, order, c, finer, modes, r);
   EXPECT_TRUE(r.held) << "no mode near the prediction: held";
   c.held_frames = o.mode_filter_patience;
-  analysis.analyse(ps, order, c, &finer, modes, r);
+  analyse(analysis, ps, order, c, finer, modes, r);
   EXPECT_FALSE(r.held) << "after the patience, the best mode anyway";
   EXPECT_EQ(modes[r.chosen].pose.x, 10.0f);
   c.held_frames = 0;
   c.unconfident_frames = 40;  // the distance grows
-  analysis.analyse(ps, order, c, &finer, modes, r);
+  analyse(analysis, ps, order, c, finer, modes, r);
   EXPECT_FALSE(r.held);
 }
 
@@ -357,8 +372,7 @@ TEST(ParticleFilter, RecoversAfterTheTargetJumpsByScatteringAndMeasuring) {
   EdgeBuffers buffers;
   EdgeMapLoader loader = buffers.loader({table_format::DetectorKind::kBinary, 0});
   EdgeCorrelationMeasure coarse(s.table, loader, 2, 2), fine(s.table, loader, 1, 1);
-  ParticlePolicies policies{&loader, &coarse, &fine};
-  ParticleFilter filter(policies);
+  ParticleFilter<EdgeCorrelationMeasure, EdgeCorrelationMeasure, EdgeMapLoader> filter(coarse, &fine, &loader);
   std::vector<Particle> cloud(2000), next(2000);
   std::vector<std::uint32_t> order(4000);
   ASSERT_EQ(filter.start({}, {50, 50, 0, 0}, 1, 4, {cloud, next, order}), Status::kOk);
@@ -384,9 +398,7 @@ TEST(ParticleFilter, BadArgumentsAreRefused) {
   EdgeCorrelationMeasure m(s.table, loader, 1, 0);
   std::vector<Particle> cloud(10), next(10);
   std::vector<std::uint32_t> order(20);
-  ParticleFilter none(ParticlePolicies{});
-  EXPECT_EQ(none.start({}, {}, 1, 1, {cloud, next, order}), Status::kInvalidArgument);
-  ParticleFilter f(ParticlePolicies{&loader, &m});
+  ParticleFilter<EdgeCorrelationMeasure, EdgeCorrelationMeasure, EdgeMapLoader> f(m, nullptr, &loader);
   ParticleEstimate e;
   EXPECT_EQ(f.step(s.frame(80, 80, 0).view(), e), Status::kInvalidArgument) << "before start";
   ParticleFilterOptions bad;

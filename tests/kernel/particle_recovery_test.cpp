@@ -46,7 +46,7 @@ int reacquire(const Rig& rig, bool particles, float rx, float ry, int budget = 1
   const Detector binary{table_format::DetectorKind::kBinary, 0};
   EdgeMapLoader loader(binary, bits, strip, kSide, kSide);
   EdgeCorrelationMeasure coarse(rig.table, loader, 1, 1), fine(rig.table, loader, 1, 0);
-  ParticleFilter filter(ParticlePolicies{&loader, &coarse, &fine});
+  EdgeParticleFilter filter(coarse, &fine, &loader);
   std::vector<Particle> cloud(1500), next(1500);
   std::vector<std::uint32_t> order(3000);
   EXPECT_EQ(filter.start({}, {60, 60, 0, 0}, 1, 3, {cloud, next, order}), Status::kOk);
@@ -85,7 +85,7 @@ TEST(ParticleRecovery, BadOptionsAreRefused) {
   std::vector<RoiPoint> strip(kSide);
   EdgeMapLoader loader({table_format::DetectorKind::kBinary, 0}, bits, strip, kSide, kSide);
   EdgeCorrelationMeasure m(rig.table, loader, 1, 0);
-  ParticleFilter filter(ParticlePolicies{&loader, &m});
+  EdgeParticleFilter filter(m, nullptr, &loader);
   testing::TrackerTestScratch scratch(rig.table);
   host::Rng noise(1);
   const app::GrayImage g = rig.frame(60, 60, 0, true, noise);

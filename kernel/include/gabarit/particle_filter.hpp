@@ -3,23 +3,25 @@
 // improvements against clutter and occlusion, each switchable.
 //
 // One frame (ParticleFilter::step):
-//   1. picking and propagation (ParticlePropagation): particles are picked
+//   1. picking and propagation (the Propagation policy): particles are picked
 //      in proportion to their weights (systematic resampling), moved by the
 //      estimate's velocity and diffused by Gaussian noise; a fraction may be
 //      re-drawn around a recovered pose instead (partial re-initialisation);
-//   2. image loading (FrameLoader): once per frame, what the measure reads
+//   2. image loading (Loader): once per frame, what the measure reads
 //      (an edge map of the particles' window);
-//   3. observation (ParticleMeasure): each particle's weight, the likelihood
+//   3. observation (Measure): each particle's weight, the likelihood
 //      of the frame at its pose;
-//   4. compensation (ParticleCompensation): weights re-weighted by kinematics
+//   4. compensation (Compensation): weights re-weighted by kinematics
 //      (over-weighting near the predicted pose, in proportion to confidence);
-//   5. result analysis (ParticleAnalysis): particles sorted by weight and
+//   5. result analysis (Analysis): particles sorted by weight and
 //      clustered into modes; the few heaviest modes disambiguated by a finer
 //      measure; the output mode chosen by mode filtering (within an adaptive
 //      distance of the prediction); the estimate is that mode's weighted mean.
-// Each stage is a plain interface (abstract class, no virtual destructor: the
-// filter never owns or deletes one) with the default implementation below;
-// a firmware engineer swaps one by passing another.
+// Each stage is a template parameter of ParticleFilter with a default below;
+// a firmware engineer swaps one by naming another type that has the same
+// member functions (the requirements are listed at each default). Templates,
+// not virtual calls: every call is direct, so the firmware's static stack
+// analysis (platform/cortex-m/firmware_report.py) follows all of them.
 //
 // Improvements and the thesis sections they come from (each an option):
 //   modes (3.5.3): sorted by weight (LSD radix sort, O(n)), then one pass
@@ -161,30 +163,22 @@ bool valid(const ParticleFilterOptions& options) noexcept;
 ParticleFilterOptions plain_condensation() noexcept;
 
 // 5. Image loading: once per frame, before any particle is weighed, with the
-// window the particles (and the measure's reach) cover, clipped to the image.
-class FrameLoader {
- public:
-  [[nodiscard]] virtual Status load(const ImageView& image, const ImageWindow& window) noexcept = 0;
-
- protected:
-  ~FrameLoader() = default;
+// window the particles (and the measures' reach) cover, clipped to the image.
+//   Status load(const ImageView& image, const ImageWindow& window) noexcept;
+// NoFrameLoader loads nothing (a measure that reads the image itself).
+struct NoFrameLoader {
+  [[nodiscard]] Status load(const ImageView&, const ImageWindow&) noexcept { return Status::kOk; }
 };
 
-// 3. Observation. prepare is called once per frame after the loader, with
-// the predicted pose (where the cloud is expected); weigh writes each
-// particle's score in [0, 1] to its weight; score gives one pose's.
-class ParticleMeasure {
- public:
-  [[nodiscard]] virtual Status prepare(const ImageView& image, const Pose& predicted) noexcept = 0;
-  virtual void weigh(std::span<Particle> particles) noexcept = 0;
-  virtual float score(const Pose& pose) noexcept = 0;
-  // How far (pixels) beyond a pose the measure reads the frame: the loader's
-  // window covers the particles plus this.
-  virtual std::uint32_t reach_px() const noexcept = 0;
-
- protected:
-  ~ParticleMeasure() = default;
-};
+// 3. Observation (particle_measures.hpp has two). A measure has
+//   Status prepare(const ImageView& image, const Pose& predicted) noexcept;
+//     once per frame after the loader, at the predicted pose;
+//   void weigh(std::span<Particle> particles) noexcept;
+//     each particle's score in [0, 1] written to its weight;
+//   float score(const Pose& pose) noexcept;   one pose's score;
+//   std::uint32_t reach_px() const noexcept;
+//     how far (pixels) beyond a pose it reads the frame: the loader's window
+//     covers the particles plus this.
 
 // What the policies know of the filter's state.
 struct ParticleContext {
@@ -202,55 +196,42 @@ struct ParticleContext {
   const ParticleFilterOptions* options = nullptr;
 };
 
-// 1. Picking and propagation: `next` from the weighted `cloud` (same size).
-class ParticlePropagation {
+// 1. Picking and propagation: `next` (the same size) from the weighted `cloud`.
+//   void propagate(std::span<const Particle> cloud, std::span<Particle> next,
+//                  const ParticleContext& context, ParticleRng& rng) noexcept;
+class DefaultPropagation {
  public:
-  virtual void propagate(std::span<const Particle> cloud, std::span<Particle> next, const ParticleContext& context,
-                         ParticleRng& rng) noexcept = 0;
-
- protected:
-  ~ParticlePropagation() = default;
+  void propagate(std::span<const Particle> cloud, std::span<Particle> next, const ParticleContext& context,
+                 ParticleRng& rng) noexcept;
 };
 
-// 4. Compensation: after the measure, before analysis.
-class ParticleCompensation {
+// 4. Compensation, after the measure and before analysis:
+//   void compensate(std::span<Particle> particles, const ParticleContext& context) noexcept;
+class KinematicCompensation {
  public:
-  virtual void compensate(std::span<Particle> particles, const ParticleContext& context) noexcept = 0;
-
- protected:
-  ~ParticleCompensation() = default;
+  void compensate(std::span<Particle> particles, const ParticleContext& context) noexcept;
 };
 
-// 5. Result analysis: modes (at most modes.size()) and the index of the output one.
+// 2. Result analysis, in two halves around the finer measure's scores:
+//   std::uint32_t cluster(std::span<const Particle> particles, std::span<std::uint32_t> order,
+//                         const ParticleContext& context, std::span<ParticleMode> modes) noexcept;
+//     the modes, heaviest first (at most modes.size()), and their count;
+//   void choose(std::span<const ParticleMode> modes, std::uint32_t scored,
+//               const ParticleContext& context, ParticleAnalysisResult& out) noexcept;
+//     the best and the output mode, the first `scored` modes carrying the
+//     finer measure's score.
 struct ParticleAnalysisResult {
   std::uint32_t modes = 0;
   std::uint32_t chosen = 0;
   std::uint32_t best = 0;         // the best mode (before mode filtering)
   bool held = false;              // mode filtering kept the prediction: no mode near enough
 };
-class ParticleAnalysis {
+class ModeAnalysis {
  public:
-  virtual void analyse(std::span<const Particle> particles, std::span<std::uint32_t> order, const ParticleContext& context,
-                       ParticleMeasure* finer, std::span<ParticleMode> modes, ParticleAnalysisResult& out) noexcept = 0;
-
- protected:
-  ~ParticleAnalysis() = default;
-};
-
-// The defaults, driven by ParticleFilterOptions.
-class DefaultPropagation final : public ParticlePropagation {
- public:
-  void propagate(std::span<const Particle> cloud, std::span<Particle> next, const ParticleContext& context,
-                 ParticleRng& rng) noexcept override;
-};
-class KinematicCompensation final : public ParticleCompensation {
- public:
-  void compensate(std::span<Particle> particles, const ParticleContext& context) noexcept override;
-};
-class ModeAnalysis final : public ParticleAnalysis {
- public:
-  void analyse(std::span<const Particle> particles, std::span<std::uint32_t> order, const ParticleContext& context,
-               ParticleMeasure* finer, std::span<ParticleMode> modes, ParticleAnalysisResult& out) noexcept override;
+  std::uint32_t cluster(std::span<const Particle> particles, std::span<std::uint32_t> order, const ParticleContext& context,
+                        std::span<ParticleMode> modes) noexcept;
+  void choose(std::span<const ParticleMode> modes, std::uint32_t scored, const ParticleContext& context,
+              ParticleAnalysisResult& out) noexcept;
 };
 
 // Sorts indices 0..n-1 of `particles` by weight, heaviest first, ties by
@@ -270,27 +251,15 @@ struct ParticleEstimate {
   bool reinitialised = false; // part of the cloud was re-drawn this frame
 };
 
-struct ParticlePolicies {
-  FrameLoader* loader = nullptr;          // optional
-  ParticleMeasure* measure = nullptr;     // required
-  ParticleMeasure* finer = nullptr;       // optional: disambiguation and confidence
-  ParticlePropagation* propagation = nullptr;  // null: DefaultPropagation
-  ParticleCompensation* compensation = nullptr;  // null: KinematicCompensation
-  ParticleAnalysis* analysis = nullptr;   // null: ModeAnalysis
-};
-
-class ParticleFilter {
+// The part of the filter that does not depend on its policies' types.
+class ParticleFilterCore {
  public:
-  explicit ParticleFilter(const ParticlePolicies& policies) noexcept;
-  // Errors: kInvalidArgument for bad options, no measure, a pose outside
-  // pose_in_range, depth_count 0 or initial.depth >= depth_count;
-  // kBufferTooSmall for scratch short of the sizes above (cloud empty or
-  // over kMaxParticles is kInvalidArgument).
+  // Errors: kInvalidArgument for bad options, a pose outside pose_in_range,
+  // depth_count 0 or initial.depth >= depth_count, a cloud that is empty or
+  // over kMaxParticles; kBufferTooSmall for `next` or `order` short of the
+  // sizes above.
   [[nodiscard]] Status start(const ParticleFilterOptions& options, const Pose& initial, std::uint16_t depth_count,
                              std::uint64_t seed, ParticleScratch scratch) noexcept;
-  // Errors: kInvalidArgument for an invalid image or before start(); the
-  // loader's and the measure's.
-  [[nodiscard]] Status step(const ImageView& image, ParticleEstimate& out) noexcept;
   // Partial re-initialisation around a pose found elsewhere (the stencil
   // tracker's, a detector's): the next step draws `fraction` (0..1) of the
   // cloud around it. Ignored for a pose outside pose_in_range.
@@ -309,11 +278,16 @@ class ParticleFilter {
   std::span<const Particle> particles() const noexcept { return cloud_; }
   std::span<const ParticleMode> modes() const noexcept { return {modes_, mode_count_}; }
 
- private:
-  ParticlePolicies policies_;
-  DefaultPropagation default_propagation_;
-  KinematicCompensation default_compensation_;
-  ModeAnalysis default_analysis_;
+ protected:
+  ParticleFilterCore() = default;
+  ~ParticleFilterCore() = default;
+  // The steps around the policies' calls (ParticleFilter::step).
+  [[nodiscard]] Status begin_step(const ImageView& image, ParticleEstimate& out) noexcept;
+  void after_propagation(ParticleEstimate& out) noexcept;  // next becomes the cloud; a pending partial scatter
+  ImageWindow loader_window(const ImageView& image, std::uint32_t reach) const noexcept;
+  void sharpen() noexcept;  // weights: scores to the power `sharpness`
+  void finish_step(const ParticleAnalysisResult& analysis, float score, ParticleEstimate& out) noexcept;
+
   ParticleFilterOptions options_;
   ParticleContext context_;
   ParticleRng rng_;
@@ -321,18 +295,75 @@ class ParticleFilter {
   std::span<std::uint32_t> order_;
   ParticleMode modes_[kMaxParticleModes];
   std::uint32_t mode_count_ = 0;
+  bool started_ = false;
+  bool scattered_ = false;          // the cloud was scattered: the next step skips propagation
+
+ private:
+  void draw_uniform(Particle& p, const float* region) noexcept;
+
   float reference_ = 0.0f;          // the score at the first frame (0: not yet)
   std::uint32_t unconfident_ = 0;   // frames since the last confident one
   std::uint32_t held_ = 0;          // consecutive frames mode filtering held
   Pose last_confident_;
-  bool started_ = false;
-  bool scattered_ = false;          // the cloud was scattered: the next step skips propagation
   Pose external_reinit_;
   float external_fraction_ = 0.0f;
   float scatter_[6] = {};           // a pending partial scatter's region
   float scatter_fraction_ = 0.0f;   // and its share of the cloud (0: none)
+};
 
-  void draw_uniform(Particle& p, const float* region) noexcept;
+// The filter over a measure type, an optional finer measure of type Finer
+// (disambiguation and confidence; null: the measure's own score), an
+// optional loader, and the three other policies. The measure, finer measure
+// and loader must outlive the filter.
+template <class Measure, class Finer = Measure, class Loader = NoFrameLoader, class Propagation = DefaultPropagation,
+          class Compensation = KinematicCompensation, class Analysis = ModeAnalysis>
+class ParticleFilter : public ParticleFilterCore {
+ public:
+  explicit ParticleFilter(Measure& measure, Finer* finer = nullptr, Loader* loader = nullptr, Propagation propagation = {},
+                          Compensation compensation = {}, Analysis analysis = {}) noexcept
+      : measure_(measure), finer_(finer), loader_(loader), propagation_(propagation), compensation_(compensation),
+        analysis_(analysis) {}
+
+  // One frame. Errors: kInvalidArgument for an invalid image or before
+  // start(); the loader's and the measures'.
+  [[nodiscard]] Status step(const ImageView& image, ParticleEstimate& out) noexcept {
+    GABARIT_TRY(begin_step(image, out));
+    if (!scattered_) propagation_.propagate(cloud_, next_, context_, rng_);
+    after_propagation(out);
+    if (loader_ != nullptr) {
+      std::uint32_t reach = measure_.reach_px();
+      if (finer_ != nullptr && finer_->reach_px() > reach) reach = finer_->reach_px();
+      GABARIT_TRY(loader_->load(image, loader_window(image, reach)));
+    }
+    GABARIT_TRY(measure_.prepare(image, context_.predicted));
+    const bool finer_is_measure = static_cast<const void*>(finer_) == static_cast<const void*>(&measure_);
+    if (finer_ != nullptr && !finer_is_measure) GABARIT_TRY(finer_->prepare(image, context_.predicted));
+    measure_.weigh(cloud_);
+    sharpen();
+    compensation_.compensate(cloud_, context_);
+    mode_count_ = analysis_.cluster(cloud_, order_, context_, {modes_, kMaxParticleModes});
+    // Disambiguation: the finer measure scores the heaviest modes.
+    std::uint32_t scored = 0;
+    if (options_.disambiguate && finer_ != nullptr)
+      scored = options_.disambiguate_modes < mode_count_ ? options_.disambiguate_modes : mode_count_;
+    for (std::uint32_t m = 0; m < mode_count_; ++m) modes_[m].score = m < scored ? finer_->score(modes_[m].pose) : -1.0f;
+    ParticleAnalysisResult analysis;
+    analysis_.choose({modes_, mode_count_}, scored, context_, analysis);
+    out.modes = mode_count_;
+    if (mode_count_ == 0) return Status::kOk;  // a custom analysis that found none: nothing to report
+    ParticleMode& chosen = modes_[analysis.chosen];
+    if (chosen.score < 0.0f) chosen.score = finer_ != nullptr ? finer_->score(chosen.pose) : measure_.score(chosen.pose);
+    finish_step(analysis, chosen.score, out);
+    return Status::kOk;
+  }
+
+ private:
+  Measure& measure_;
+  Finer* finer_;
+  Loader* loader_;
+  Propagation propagation_;
+  Compensation compensation_;
+  Analysis analysis_;
 };
 
 }  // namespace gabarit

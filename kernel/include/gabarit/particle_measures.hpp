@@ -1,4 +1,5 @@
-// The particle filter's image loading and measures (particle_filter.hpp):
+// The particle filter's image loading and measures (particle_filter.hpp),
+// each a policy type ParticleFilter takes as a template parameter:
 //
 //  - EdgeMapLoader: the frame's features (the table's detector: Canny,
 //    gradient rows or binary) over the particles' window, as one bit per
@@ -55,7 +56,7 @@ struct EdgeMap {
   bool near(std::int32_t x, std::int32_t y, std::uint32_t t) const noexcept;
 };
 
-class EdgeMapLoader final : public FrameLoader {
+class EdgeMapLoader {
  public:
   // bits: edge_map_words of the largest window loaded (load clips larger
   // windows to what the bitmap holds, keeping the window's centre);
@@ -65,7 +66,7 @@ class EdgeMapLoader final : public FrameLoader {
       : detector_(detector), bits_(bits), features_(features), max_width_(max_width), max_height_(max_height) {}
   // Errors: kInvalidArgument for an invalid image or detector threshold,
   // kBufferTooSmall when bits or features are short of the sizes above.
-  [[nodiscard]] Status load(const ImageView& image, const ImageWindow& window) noexcept override;
+  [[nodiscard]] Status load(const ImageView& image, const ImageWindow& window) noexcept;
   const EdgeMap& map() const noexcept { return map_; }
 
  private:
@@ -76,16 +77,16 @@ class EdgeMapLoader final : public FrameLoader {
   EdgeMap map_;
 };
 
-class EdgeCorrelationMeasure final : public ParticleMeasure {
+class EdgeCorrelationMeasure {
  public:
   // The model points come from `table` (which must outlive the measure);
   // stride >= 1, tolerance 0..3 pixels.
   EdgeCorrelationMeasure(const TableView& table, const EdgeMapLoader& edges, std::uint32_t stride,
                          std::uint32_t tolerance) noexcept;
-  [[nodiscard]] Status prepare(const ImageView&, const Pose&) noexcept override { return Status::kOk; }
-  void weigh(std::span<Particle> particles) noexcept override;
-  float score(const Pose& pose) noexcept override;
-  std::uint32_t reach_px() const noexcept override;
+  [[nodiscard]] Status prepare(const ImageView&, const Pose&) noexcept { return Status::kOk; }
+  void weigh(std::span<Particle> particles) noexcept;
+  float score(const Pose& pose) noexcept;
+  std::uint32_t reach_px() const noexcept;
 
  private:
   const TableView& table_;
@@ -95,16 +96,16 @@ class EdgeCorrelationMeasure final : public ParticleMeasure {
   std::uint32_t reach_ = 0;
 };
 
-class StencilVoteMeasure final : public ParticleMeasure {
+class StencilVoteMeasure {
  public:
   // scratch: as track_step's (tracker.hpp). The table must outlive the measure.
   StencilVoteMeasure(const TableView& table, const Detector& detector, TrackerScratch scratch) noexcept
       : table_(table), detector_(detector), scratch_(scratch) {}
   // Votes the ROI at `predicted`. Errors: track_step's.
-  [[nodiscard]] Status prepare(const ImageView& image, const Pose& predicted) noexcept override;
-  void weigh(std::span<Particle> particles) noexcept override;
-  float score(const Pose& pose) noexcept override;
-  std::uint32_t reach_px() const noexcept override { return 0; }
+  [[nodiscard]] Status prepare(const ImageView& image, const Pose& predicted) noexcept;
+  void weigh(std::span<Particle> particles) noexcept;
+  float score(const Pose& pose) noexcept;
+  std::uint32_t reach_px() const noexcept { return 0; }
   // The cell whose motion from this frame's prediction contains `pose`, or kNoCell.
   std::uint32_t cell_of(const Pose& pose) const noexcept;
   const PreparedFrame& frame() const noexcept { return frame_; }

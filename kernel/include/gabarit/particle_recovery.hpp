@@ -2,7 +2,7 @@
 // TrackingSession runs while its target is lost, instead of the grid search
 // (recovery_search.hpp), when it is given one (use_particle_recovery).
 //
-// Each lost frame: the filter's cloud is spread over a search region (every
+// Each lost frame: the filter's cloud (an EdgeParticleFilter) is spread over a search region (every
 // depth): all of it on the first lost frame, rescatter of it on the next
 // ones, so the search keeps looking while the rest of the cloud converges on
 // the best edge correlation. The region is centred where the target would be
@@ -26,12 +26,16 @@
 
 #include "gabarit/image_view.hpp"
 #include "gabarit/particle_filter.hpp"
+#include "gabarit/particle_measures.hpp"
 #include "gabarit/recovery_search.hpp"
 #include "gabarit/status.hpp"
 #include "gabarit/table_view.hpp"
 #include "gabarit/tracker.hpp"
 
 namespace gabarit {
+
+// The filter this stage runs: edge correlation, the finer edge correlation, the edge map.
+using EdgeParticleFilter = ParticleFilter<EdgeCorrelationMeasure, EdgeCorrelationMeasure, EdgeMapLoader>;
 
 struct ParticleRecoveryOptions {
   float reach_px = 40.0f;         // the region's half-side on the first lost frame
@@ -47,7 +51,7 @@ class ParticleRecovery {
  public:
   // `fine` and `filter` must outlive the stage; the filter must have been
   // started (ParticleFilter::start; any pose, its depth count the table's).
-  ParticleRecovery(const TableView& fine, const Detector& detector, ParticleFilter& filter,
+  ParticleRecovery(const TableView& fine, const Detector& detector, EdgeParticleFilter& filter,
                    const ParticleRecoveryOptions& options = {}) noexcept
       : fine_(fine), detector_(detector), filter_(filter), options_(options) {}
   // Starts a lost period: the next run spreads the whole cloud.
@@ -61,7 +65,7 @@ class ParticleRecovery {
  private:
   const TableView& fine_;
   Detector detector_;
-  ParticleFilter& filter_;
+  EdgeParticleFilter& filter_;
   ParticleRecoveryOptions options_;
   std::uint32_t frames_ = 0;  // lost frames run in this period
 };

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <optional>
 #include <string>
 
 #include "gabarit/app/args.hpp"
@@ -42,6 +43,7 @@ void switch_off_improvements(const std::string& list, ParticleFilterOptions& o, 
 }
 
 struct ParticleTracker::Parts {
+  using StencilFilter = ParticleFilter<StencilVoteMeasure, EdgeCorrelationMeasure, EdgeMapLoader>;
   Parts(const TableView& t, std::uint32_t w, std::uint32_t h, const ParticleRunOptions& o)
       : table(t),
         options(o),
@@ -55,15 +57,18 @@ struct ParticleTracker::Parts {
         stencil(t, detector, buffers.scratch()),
         cloud(o.particles),
         next(o.particles),
-        order(particle_scratch_order(o.particles)),
-        filter(policies()) {}
-  ParticlePolicies policies() {
-    ParticlePolicies p;
-    // The edge map only where a measure reads it: the stencil measure alone needs none.
-    p.loader = options.measure == ParticleMeasureKind::kEdges || options.finer ? &loader : nullptr;
-    p.measure = options.measure == ParticleMeasureKind::kEdges ? static_cast<ParticleMeasure*>(&edges) : &stencil;
-    p.finer = options.finer ? &fine : nullptr;
-    return p;
+        order(particle_scratch_order(o.particles)) {
+    EdgeCorrelationMeasure* finer = o.finer ? &fine : nullptr;
+    if (o.measure == ParticleMeasureKind::kEdges) {
+      edge_filter.emplace(edges, finer, &loader);
+    } else {
+      // The edge map only where a measure reads it: the stencil measure alone needs none.
+      stencil_filter.emplace(stencil, finer, o.finer ? &loader : nullptr);
+    }
+  }
+  ParticleFilterCore& core() {
+    if (edge_filter) return *edge_filter;
+    return *stencil_filter;
   }
   const TableView& table;
   ParticleRunOptions options;
@@ -76,7 +81,8 @@ struct ParticleTracker::Parts {
   StencilVoteMeasure stencil;
   std::vector<Particle> cloud, next;
   std::vector<std::uint32_t> order;
-  ParticleFilter filter;
+  std::optional<EdgeParticleFilter> edge_filter;
+  std::optional<StencilFilter> stencil_filter;
 };
 
 ParticleTracker::ParticleTracker(const TableView& table, std::uint32_t max_width, std::uint32_t max_height,
@@ -90,17 +96,22 @@ ParticleTracker::ParticleTracker(const TableView& table, std::uint32_t max_width
 }
 ParticleTracker::~ParticleTracker() = default;
 
-ParticleFilter& ParticleTracker::filter() { return parts_->filter; }
+ParticleFilterCore& ParticleTracker::core() { return parts_->core(); }
+
+EdgeParticleFilter& ParticleTracker::edge_filter() {
+  if (!parts_->edge_filter) throw app::Error("particle filter: this one runs the stencil measure, not the edge measure");
+  return *parts_->edge_filter;
+}
 
 void ParticleTracker::start(const Pose& initial) {
-  const Status s = parts_->filter.start(parts_->options.filter, initial, parts_->table.depth_count(), parts_->options.seed,
+  const Status s = parts_->core().start(parts_->options.filter, initial, parts_->table.depth_count(), parts_->options.seed,
                                         {parts_->cloud, parts_->next, parts_->order});
   if (s != Status::kOk) throw app::Error(std::string("particle filter: start failed: ") + status_name(s));
 }
 
 ParticleEstimate ParticleTracker::step(const app::GrayImage& frame) {
   ParticleEstimate e;
-  const Status s = parts_->filter.step(frame.view(), e);
+  const Status s = parts_->edge_filter ? parts_->edge_filter->step(frame.view(), e) : parts_->stencil_filter->step(frame.view(), e);
   if (s != Status::kOk) throw app::Error(std::string("particle filter: step failed: ") + status_name(s));
   return e;
 }

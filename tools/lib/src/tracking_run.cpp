@@ -112,7 +112,7 @@ void run_tracking(const TableView& table, app::FrameSource& frames, const Pose& 
     if (options.particle_recovery && !particles) {
       particles = std::make_unique<ParticleTracker>(table, frame.width, frame.height, options.particles);
       particles->start(init);
-      particle_recovery.emplace(table, options.detector ? *options.detector : detector_of(table), particles->filter(),
+      particle_recovery.emplace(table, options.detector ? *options.detector : detector_of(table), particles->edge_filter(),
                                 options.particle_recovery_options);
       session.use_particle_recovery(&*particle_recovery);
     }

@@ -15,6 +15,7 @@
 #include "gabarit/app/scratch.hpp"
 #include "gabarit/particle_filter.hpp"
 #include "gabarit/particle_measures.hpp"
+#include "gabarit/particle_recovery.hpp"
 #include "gabarit/table_view.hpp"
 
 namespace gabarit::host {
@@ -55,7 +56,10 @@ class ParticleTracker {
   // Throws app::Error with the kernel's status name on failure.
   void start(const Pose& initial);
   ParticleEstimate step(const app::GrayImage& frame);
-  ParticleFilter& filter();
+  ParticleFilterCore& core();
+  // The filter with the edge measure (particle_recovery.hpp runs it).
+  // Throws app::Error with the stencil measure.
+  EdgeParticleFilter& edge_filter();
 
  private:
   struct Parts;
