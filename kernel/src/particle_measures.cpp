@@ -2,7 +2,6 @@
 
 #include "gabarit/assert.hpp"
 #include "gabarit/deterministic_math.hpp"
-#include "gabarit/dense_voter.hpp"
 #include "gabarit/features.hpp"
 
 namespace gabarit {
@@ -134,16 +133,7 @@ std::uint32_t EdgeCorrelationMeasure::reach_px() const noexcept { return reach_;
 Status StencilVoteMeasure::prepare(const ImageView& image, const Pose& predicted) noexcept {
   prepared_ = false;
   GABARIT_TRY(prepare_frame(table_, detector_, image, predicted, scratch_, frame_));
-  GABARIT_TRY(clear_counters(table_, scratch_.counters));
-  const std::span<const RoiPoint> features = scratch_.features.first(frame_.features);
-  tally_ = {};
-  if (!scratch_.dense_masks.empty()) {
-    GABARIT_TRY(accumulate_votes_dense(table_, scratch_.dense_masks, features, scratch_.counters, scratch_.dense_scratch, tally_));
-  } else if (!scratch_.expanded_offsets.empty()) {
-    GABARIT_TRY(accumulate_votes_expanded(table_, scratch_.expanded_offsets, features, scratch_.counters, tally_));
-  } else {
-    GABARIT_TRY(accumulate_votes(table_, features, scratch_.counters, tally_));
-  }
+  GABARIT_TRY(vote_prepared(table_, frame_, scratch_, tally_));
   predicted_ = predicted;
   rotation_ = sin_cos_deg(predicted.theta_deg);
   prepared_ = true;

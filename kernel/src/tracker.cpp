@@ -182,17 +182,19 @@ Status track_step(const TableView& table, const Detector& detector, const ImageV
                   TrackerScratch scratch, StepResult& result) noexcept {
   PreparedFrame frame;
   GABARIT_TRY(prepare_frame(table, detector, image, previous, scratch, frame));
-  GABARIT_TRY(clear_counters(table, scratch.counters));
-  const std::span<const RoiPoint> features = scratch.features.first(frame.features);
   VoteTally tally;
-  if (!scratch.dense_masks.empty()) {
-    GABARIT_TRY(accumulate_votes_dense(table, scratch.dense_masks, features, scratch.counters, scratch.dense_scratch, tally));
-  } else if (!scratch.expanded_offsets.empty()) {
-    GABARIT_TRY(accumulate_votes_expanded(table, scratch.expanded_offsets, features, scratch.counters, tally));
-  } else {
-    GABARIT_TRY(accumulate_votes(table, features, scratch.counters, tally));
-  }
+  GABARIT_TRY(vote_prepared(table, frame, scratch, tally));
   return finish_frame(table, previous, frame, scratch.counters, tally, result);
+}
+
+Status vote_prepared(const TableView& table, const PreparedFrame& frame, TrackerScratch scratch, VoteTally& tally) noexcept {
+  GABARIT_TRY(clear_counters(table, scratch.counters));
+  if (frame.features > scratch.features.size()) return Status::kBufferTooSmall;
+  const std::span<const RoiPoint> features = scratch.features.first(frame.features);
+  tally = {};
+  if (!scratch.dense_masks.empty()) return accumulate_votes_dense(table, scratch.dense_masks, features, scratch.counters, scratch.dense_scratch, tally);
+  if (!scratch.expanded_offsets.empty()) return accumulate_votes_expanded(table, scratch.expanded_offsets, features, scratch.counters, tally);
+  return accumulate_votes(table, features, scratch.counters, tally);
 }
 
 }  // namespace gabarit

@@ -104,8 +104,7 @@ inline Detector detector_of(const TableView& t) noexcept { return {t.detector_ki
 //                  scratch.features[0, features);
 //   (vote)         clear the counters, vote those features into them;
 //   finish_frame   the best cells and the pose update.
-// track_step is exactly prepare_frame, clear_counters, accumulate_votes (or
-// the dense voter) and finish_frame.
+// track_step is exactly prepare_frame, vote_prepared and finish_frame.
 struct PreparedFrame {
   std::int32_t roi_centre_x = 0;
   std::int32_t roi_centre_y = 0;
@@ -114,6 +113,10 @@ struct PreparedFrame {
 };
 Status prepare_frame(const TableView& table, const Detector& detector, const ImageView& image, const Pose& previous,
                      TrackerScratch scratch, PreparedFrame& out) noexcept;
+// The vote between the halves: clears the counters and votes the prepared
+// frame's features with the voter the scratch selects (dense masks, expanded
+// offsets, or the table's own offsets; bit-identical either way).
+Status vote_prepared(const TableView& table, const PreparedFrame& frame, TrackerScratch scratch, VoteTally& tally) noexcept;
 Status finish_frame(const TableView& table, const Pose& previous, const PreparedFrame& frame,
                     std::span<const VoteCounter> counters, const VoteTally& tally, StepResult& result) noexcept;
 // prepare_frame from features already detected over a larger window (in
