@@ -29,6 +29,22 @@ TrackerBuffers::TrackerBuffers(const TableView& table, VoterChoice voter)
 
 TrackerScratch TrackerBuffers::scratch() { return {features_, counters_, mask_, masks_, dense_scratch_, expanded_}; }
 
+FinderBuffers::FinderBuffers(const TableView& table, const Detector& detector, const FinderOptions& options,
+                             std::uint32_t width, std::uint32_t height)
+    : geometry_(finder_geometry(table, detector, options, width, height)), width_(width), height_(height) {
+  const FinderScratchSizes n = finder_scratch_sizes(geometry_, table);
+  coarse_image_.resize(n.coarse_pixels);
+  coarse_features_.resize(n.coarse_pixels);
+  feature_index_.resize(n.coarse_pixels);
+  accumulator_.resize(n.accumulator);
+  model_.resize(n.model_points);
+  rotated_.resize(2 * n.model_points);
+}
+
+FinderScratch FinderBuffers::scratch(TrackerScratch fine) {
+  return {coarse_image_, coarse_features_, feature_index_, accumulator_, model_, rotated_, fine};
+}
+
 SessionBuffers::SessionBuffers(const TableView& fine, const TableView* coarse, VoterChoice voter, bool search_features)
     : fine_(fine, voter) {
   if (coarse != nullptr) {

@@ -1,5 +1,7 @@
 #include "gabarit/features.hpp"
 
+#include "gabarit/deterministic_math.hpp"
+
 namespace gabarit {
 namespace {
 
@@ -42,6 +44,52 @@ std::uint16_t gradient_magnitude(const ImageView& image, std::uint32_t x, std::u
   const std::int32_t gx = (up[1] + 2 * mid[1] + down[1]) - (up[-1] + 2 * mid[-1] + down[-1]);
   const std::int32_t gy = (down[-1] + 2 * down[0] + down[1]) - (up[-1] + 2 * up[0] + up[1]);
   return static_cast<std::uint16_t>(abs32(gx) + abs32(gy));
+}
+
+SobelGradient sobel_gradient(const ImageView& image, std::uint32_t x, std::uint32_t y) noexcept {
+  if (x == 0 || y == 0 || x + 1 >= image.width || y + 1 >= image.height) return {};
+  const std::uint8_t* up = image.pixels + std::size_t{y - 1} * image.stride + x;
+  const std::uint8_t* mid = up + image.stride;
+  const std::uint8_t* down = mid + image.stride;
+  return {(up[1] + 2 * mid[1] + down[1]) - (up[-1] + 2 * mid[-1] + down[-1]),
+          (down[-1] + 2 * down[0] + down[1]) - (up[-1] + 2 * up[0] + up[1])};
+}
+
+namespace {
+// Directions k * 180 / 256 degrees, k = 0..255, as (cos, sin) scaled by 2^20
+// and rounded: integers, so the comparisons below are exact on every target.
+struct Direction {
+  std::int64_t c, s;
+};
+struct DirectionTable {
+  Direction d[kOrientationSteps];
+};
+constexpr DirectionTable make_directions() noexcept {
+  DirectionTable t{};
+  for (std::uint32_t k = 0; k < kOrientationSteps; ++k) {
+    const SinCos sc = sin_cos_deg(static_cast<float>(k) * (180.0f / static_cast<float>(kOrientationSteps)));
+    t.d[k] = {round_to_int(sc.cos * 1048576.0f), round_to_int(sc.sin * 1048576.0f)};
+  }
+  return t;
+}
+constexpr DirectionTable kDirections = make_directions();
+}  // namespace
+
+std::uint8_t orientation_256(std::int32_t gx, std::int32_t gy) noexcept {
+  // Fold into [0, 180): the upper half-plane, +x included, -x excluded.
+  if (gy < 0 || (gy == 0 && gx < 0)) {
+    gx = -gx;
+    gy = -gy;
+  }
+  // The largest k whose direction is at or before the gradient's angle phi:
+  // phi >= alpha_k iff cross(u_k, g) >= 0, for phi and alpha_k in [0, 180).
+  std::uint32_t lo = 0, hi = kOrientationSteps;  // invariant: alpha_lo <= phi < alpha_hi
+  while (hi - lo > 1) {
+    const std::uint32_t mid = (lo + hi) / 2;
+    const Direction& u = kDirections.d[mid];
+    if (u.c * gy - u.s * gx >= 0) lo = mid; else hi = mid;
+  }
+  return static_cast<std::uint8_t>(lo);
 }
 
 Status extract_binary(const ImageView& image, const ImageWindow& window, std::span<RoiPoint> out,

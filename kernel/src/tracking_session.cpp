@@ -41,6 +41,7 @@ void TrackingSession::begin_lost() noexcept {
   lost_ = true;
   search_.reset();  // nearest placements first
   if (particles_ != nullptr) particles_->reset();  // the whole cloud spread again
+  if (detection_ != nullptr) detection_->reset();
 }
 
 Status TrackingSession::step(const ImageView& image, SessionScratch scratch, SessionResult& out) noexcept {
@@ -229,7 +230,9 @@ Status TrackingSession::recover(const ImageView& image, SessionScratch scratch, 
   SearchResult found;
   // The depth last seen with confidence: the frames since, unsure, may have
   // set the pose's depth from clutter.
-  if (particles_ != nullptr) {
+  if (detection_ != nullptr) {
+    GABARIT_TRY(detection_->run(image, scratch.fine, found));
+  } else if (particles_ != nullptr) {
     GABARIT_TRY(particles_->run(image, last_confident_, scratch.fine, found));
   } else {
     GABARIT_TRY(search_.run(image, options_.recovery, last_confident_, last_confident_.pose.depth, scratch, found));

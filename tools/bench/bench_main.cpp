@@ -85,6 +85,7 @@ struct Options {
   bool suite = false;
   bool pipette = false;
   bool no_particles = false;
+  bool no_detection = false;
   std::uint32_t particles = 1000;
   bool decimation = false;
   std::uint32_t scenes = 0;
@@ -371,7 +372,7 @@ int run(const Options& o) {
 constexpr const char* kHelp =
     "usage: gabarit bench [--quick] [--out DIR] [--threads N] [--frames N] [--timing-frames N]\n"
     "       gabarit bench --microscope [--quick] [--out DIR]\n"
-    "       gabarit bench --suite [--quick] [--out DIR] [--scenes N] [--frames N] [--no-peer] [--no-particles]\n"
+    "       gabarit bench --suite [--quick] [--out DIR] [--scenes N] [--frames N] [--no-peer] [--no-particles] [--no-detection]\n"
     "       gabarit bench --decimation [--quick] [--out DIR] [--threads N]\n"
     "       gabarit bench --pipette [--quick] [--out DIR] [--frames N] [--particles N]\n"
     "       gabarit bench --regression-csv FILE\n\n"
@@ -391,7 +392,8 @@ constexpr const char* kHelp =
     "                        loop and the OpenCV NCC bank per scene, median and worst scene per half\n"
     "                        (tuning / held out), mean and p99 us/frame; --scenes (default 32, quick 8),\n"
     "                        --frames per scene (default 160, quick 60), --no-peer skips the NCC bank,\n"
-    "                        --no-particles the particle filter\n"
+    "                        --no-particles the particle filter, --no-detection the detection rows (gabarit\n"
+    "                        detect and OpenCV's pyramid matchTemplate on every frame, re-acquisition by detection)\n"
     "  --decimation          the decimation policies instead (docs/experiments.md, \"Decimation\"): every\n"
     "                        policy x 11 keep ratios x 26 noise levels, one-step trials and continuous\n"
     "                        sequences (500/800 frames), tuning and held-out shapes, bytes and us/frame;\n"
@@ -453,6 +455,8 @@ int main(int argc, char** argv) {
         o.no_peer = true;
       } else if (a == "--no-particles") {
         o.no_particles = true;
+      } else if (a == "--no-detection") {
+        o.no_detection = true;
       } else if (a == "--regression-csv") {
         o.regression_csv = value();
       } else {
@@ -464,7 +468,8 @@ int main(int argc, char** argv) {
       throw gabarit::app::Error("give one of --microscope, --suite, --decimation and --pipette");
     if (o.pipette) return run_pipette({o.out, o.quick, static_cast<std::uint32_t>(o.grid_frames), o.particles});
     if (o.decimation) return run_decimation_study({o.out, o.quick, o.threads});
-    if ((o.scenes || o.no_peer || o.no_particles) && !o.suite) throw gabarit::app::Error("--scenes, --no-peer and --no-particles apply to --suite");
+    if ((o.scenes || o.no_peer || o.no_particles || o.no_detection) && !o.suite)
+      throw gabarit::app::Error("--scenes, --no-peer, --no-particles and --no-detection apply to --suite");
     if (o.microscope) return run_microscope(o.out, o.quick);
     if (o.suite) {
       SuiteOptions s;
@@ -474,6 +479,7 @@ int main(int argc, char** argv) {
       s.frames = static_cast<std::uint32_t>(o.grid_frames);
       s.peer = !o.no_peer;
       s.particles = !o.no_particles;
+      s.detection = !o.no_detection;
       return run_suite(s);
     }
     return run(o);

@@ -2,6 +2,7 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
@@ -67,6 +68,94 @@ const cv::Mat& NccBank::rotated(std::size_t depth, double theta) {
   const cv::Mat rot = cv::getRotationMatrix2D(cv::Point2f(static_cast<float>(m.cols / 2), static_cast<float>(m.rows / 2)), -theta, 1.0);
   cv::warpAffine(m, r, rot, m.size(), cv::INTER_LINEAR, cv::BORDER_CONSTANT, cv::Scalar(128));
   return cache_.emplace(key, r).first->second;
+}
+
+}  // namespace gabarit::bench
+
+namespace gabarit::bench {
+
+PyramidMatcher::PyramidMatcher(const std::vector<app::GrayImage>& models, int levels, double coarse_step_deg, int candidates)
+    : levels_(levels), candidates_(candidates), step_(coarse_step_deg) {
+  for (const auto& m : models)
+    models_.push_back(cv::Mat(static_cast<int>(m.height), static_cast<int>(m.width), CV_8U, const_cast<std::uint8_t*>(m.pixels.data())).clone());
+  const int angles = static_cast<int>(std::lround(360.0 / step_));
+  for (const cv::Mat& m : models_) {
+    std::vector<cv::Mat> bank;
+    for (int a = 0; a < angles; ++a) {
+      cv::Mat r = rotated(m, -180.0 + a * step_);
+      for (int l = 0; l < levels_; ++l) cv::pyrDown(r, r);
+      bank.push_back(r);
+    }
+    coarse_bank_.push_back(std::move(bank));
+  }
+}
+
+cv::Mat PyramidMatcher::rotated(const cv::Mat& m, double theta) const {
+  cv::Mat r;
+  const cv::Mat rot = cv::getRotationMatrix2D(cv::Point2f(static_cast<float>(m.cols / 2), static_cast<float>(m.rows / 2)), -theta, 1.0);
+  cv::warpAffine(m, r, rot, m.size(), cv::INTER_LINEAR, cv::BORDER_REPLICATE);
+  return r;
+}
+
+std::vector<PyramidDetection> PyramidMatcher::detect(const app::GrayImage& frame) {
+  const cv::Mat image(static_cast<int>(frame.height), static_cast<int>(frame.width), CV_8U, const_cast<std::uint8_t*>(frame.pixels.data()));
+  cv::Mat top = image;
+  for (int l = 0; l < levels_; ++l) cv::pyrDown(top, top);
+  const double scale = static_cast<double>(1 << levels_);
+  struct Peak { double x, y, theta, score; std::size_t depth; };
+  std::vector<Peak> peaks;
+  const double min_dist = 0.5 * std::min(models_[0].cols, models_[0].rows) / scale;
+  cv::Mat result;
+  for (std::size_t d = 0; d < coarse_bank_.size(); ++d)
+    for (std::size_t a = 0; a < coarse_bank_[d].size(); ++a) {
+      const cv::Mat& t = coarse_bank_[d][a];
+      if (t.cols > top.cols || t.rows > top.rows) continue;
+      cv::matchTemplate(top, t, result, cv::TM_CCOEFF_NORMED);
+      // The best few local maxima of this angle (suppressing around each).
+      for (int k = 0; k < candidates_; ++k) {
+        double score = 0;
+        cv::Point at;
+        cv::minMaxLoc(result, nullptr, &score, nullptr, &at);
+        const Peak p{at.x + t.cols / 2.0, at.y + t.rows / 2.0, -180.0 + static_cast<double>(a) * step_, score, d};
+        cv::circle(result, at, std::max(1, static_cast<int>(min_dist)), cv::Scalar(-2), -1);
+        bool merged = false;
+        for (Peak& q : peaks)
+          if (std::hypot(q.x - p.x, q.y - p.y) < min_dist) {
+            if (p.score > q.score) q = p;
+            merged = true;
+            break;
+          }
+        if (!merged) peaks.push_back(p);
+      }
+    }
+  std::sort(peaks.begin(), peaks.end(), [](const Peak& a, const Peak& b) { return a.score > b.score; });
+  if (peaks.size() > static_cast<std::size_t>(candidates_)) peaks.resize(static_cast<std::size_t>(candidates_));
+  std::vector<PyramidDetection> out;
+  const int reach = (1 << levels_) + 1;
+  for (const Peak& p : peaks) {
+    const double cx = p.x * scale + (scale - 1) / 2, cy = p.y * scale + (scale - 1) / 2;
+    PyramidDetection best{{static_cast<float>(cx), static_cast<float>(cy), static_cast<float>(p.theta), static_cast<std::uint16_t>(p.depth)}, -2};
+    const auto match = [&](std::size_t depth, double theta) {
+      const cv::Mat t = rotated(models_[depth], theta);
+      const int x0 = static_cast<int>(std::lround(cx)) - t.cols / 2 - reach, y0 = static_cast<int>(std::lround(cy)) - t.rows / 2 - reach;
+      const cv::Rect window = cv::Rect(x0, y0, t.cols + 2 * reach, t.rows + 2 * reach) & cv::Rect(0, 0, image.cols, image.rows);
+      if (window.width < t.cols || window.height < t.rows) return;
+      cv::matchTemplate(image(window), t, result, cv::TM_CCOEFF_NORMED);
+      double score = 0;
+      cv::Point at;
+      cv::minMaxLoc(result, nullptr, &score, nullptr, &at);
+      if (score > best.score)
+        best = {{static_cast<float>(window.x + at.x + t.cols / 2), static_cast<float>(window.y + at.y + t.rows / 2),
+                 static_cast<float>(theta), static_cast<std::uint16_t>(depth)}, score};
+    };
+    for (double dt = -step_ / 2; dt <= step_ / 2 + 1e-9; dt += 0.5) match(p.depth, p.theta + dt);
+    const double theta = best.pose.theta_deg;
+    for (std::size_t d = 0; d < models_.size(); ++d)
+      if (d != p.depth) match(d, theta);
+    out.push_back(best);
+  }
+  std::sort(out.begin(), out.end(), [](const PyramidDetection& a, const PyramidDetection& b) { return a.score > b.score; });
+  return out;
 }
 
 }  // namespace gabarit::bench

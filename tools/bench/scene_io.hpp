@@ -55,3 +55,30 @@ class NccBank {
 };
 
 }  // namespace gabarit::bench
+
+namespace gabarit::bench {
+
+// The detector a user would write with OpenCV to find a model anywhere: an
+// image pyramid (pyrDown `levels` times), matchTemplate TM_CCOEFF_NORMED of
+// the model rotated every coarse_step_deg (a full turn) at every depth on the
+// top level, the `candidates` best peaks (one per place), each refined at
+// full resolution over +-(2^levels + 1) px and +-coarse_step/2 in 0.5-degree
+// steps at its depth, then over every depth at its angle. Scores are NCC.
+struct PyramidDetection {
+  Pose pose;
+  double score = 0;
+};
+class PyramidMatcher {
+ public:
+  PyramidMatcher(const std::vector<app::GrayImage>& models, int levels, double coarse_step_deg, int candidates);
+  std::vector<PyramidDetection> detect(const app::GrayImage& frame);
+
+ private:
+  cv::Mat rotated(const cv::Mat& model, double theta) const;
+  std::vector<cv::Mat> models_;                        // full resolution
+  std::vector<std::vector<cv::Mat>> coarse_bank_;      // [depth][angle]
+  int levels_, candidates_;
+  double step_;
+};
+
+}  // namespace gabarit::bench

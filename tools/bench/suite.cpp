@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "gabarit/app/error.hpp"
+#include "gabarit/host/detection_run.hpp"
 #include "gabarit/host/evaluation.hpp"
 #include "gabarit/host/model.hpp"
 #include "gabarit/host/particle_run.hpp"
@@ -43,7 +44,16 @@ struct Measure {
   double search_us = 0;
 };
 
+// A detector over every frame of a scene, without a starting pose.
+struct DetectionMeasure {
+  bool ran = false;
+  int visible = 0, top1 = 0, top5 = 0;  // true pose within 2 px and 1 deg (and the depth, on tilted stacks)
+  int invisible = 0, false_frames = 0;  // frames without the target, and those with a detection
+  double mean_us = 0;
+};
+
 struct SceneResult {
+  DetectionMeasure detection, opencv_detection;
   std::uint32_t index = 0;
   std::string name;
   bool held_out = false;
@@ -56,6 +66,36 @@ constexpr const char* kSession = "gabarit default session";
 constexpr const char* kNcc = "OpenCV NCC bank";
 constexpr const char* kParticle = "particle filter (edges, 1000 particles)";
 constexpr const char* kSessionParticles = "default session, particle re-acquisition";
+constexpr const char* kSessionDetection = "default session, re-acquisition by detection";
+
+bool detection_hit(const host::PoseSample& t, const Pose& p, bool depth_counts) {
+  const double dt = std::remainder(static_cast<double>(p.theta_deg) - t.theta_deg, 360.0);
+  return std::hypot(p.x - t.x, p.y - t.y) <= 2.0 && std::abs(dt) <= 1.0 && (!depth_counts || p.depth == t.depth);
+}
+
+// Scores a detector's poses (best first, per frame) against the truth.
+template <class Detect>
+DetectionMeasure measure_detection(const std::vector<app::GrayImage>& frames, const std::vector<host::PoseSample>& truth,
+                                   bool depth_counts, Detect&& detect) {
+  DetectionMeasure m;
+  m.ran = true;
+  for (std::size_t f = 0; f < frames.size() && f < truth.size(); ++f) {
+    const auto t = Clock::now();
+    const std::vector<Pose> poses = detect(frames[f]);
+    m.mean_us += std::chrono::duration<double, std::micro>(Clock::now() - t).count() / static_cast<double>(frames.size());
+    if (!truth[f].visible) {
+      ++m.invisible;
+      m.false_frames += !poses.empty();
+      continue;
+    }
+    ++m.visible;
+    m.top1 += !poses.empty() && detection_hit(truth[f], poses[0], depth_counts);
+    bool any = false;
+    for (std::size_t k = 0; k < poses.size() && k < 5; ++k) any = any || detection_hit(truth[f], poses[k], depth_counts);
+    m.top5 += any;
+  }
+  return m;
+}
 
 // For each return to visibility after hidden frames (in order, as
 // Accuracy::reacquired_after): whether the target reappears where the
@@ -121,7 +161,8 @@ Measure measure(const std::vector<host::PoseSample>& poses, const std::vector<ho
   return m;
 }
 
-SceneResult run_scene(std::uint32_t index, std::uint32_t frames_per_scene, const std::filesystem::path& dir, bool peer, bool particles) {
+SceneResult run_scene(std::uint32_t index, std::uint32_t frames_per_scene, const std::filesystem::path& dir, bool peer, bool particles,
+                      bool detection) {
   const host::SceneOptions so = host::suite_scene(index, frames_per_scene);
   char sub[16];
   std::snprintf(sub, sizeof sub, "%02u", index);
@@ -156,8 +197,9 @@ SceneResult run_scene(std::uint32_t index, std::uint32_t frames_per_scene, const
   out.held_out = host::suite_held_out(index);
   // The defaults of gabarit track, of gabarit track --plain, and (with
   // particles) of gabarit track --recovery particle.
-  const auto session_run = [&](bool robust, bool particle_recovery, const char* name) {
+  const auto session_run = [&](bool robust, bool particle_recovery, const char* name, bool detection_recovery = false) {
     host::TrackingOptions options;
+    options.detection_recovery = detection_recovery;
     options.session = robust ? SessionOptions{} : kPlainSession;
     options.table_focus_stack = robust;
     options.particle_recovery = particle_recovery;
@@ -195,6 +237,24 @@ SceneResult run_scene(std::uint32_t index, std::uint32_t frames_per_scene, const
     out.names.push_back(kNcc);
   }
   if (particles) session_run(true, true, kSessionParticles);
+  if (detection) {
+    session_run(true, false, kSessionDetection, true);
+    // Detection in every frame, no starting pose: gabarit detect's defaults.
+    host::FrameDetector finder(table, detector_of(table), FinderOptions{});
+    out.detection = measure_detection(frames, truth, depth_counts, [&](const app::GrayImage& frame) {
+      std::vector<Pose> poses;
+      for (const Detection& d : finder.detect(frame.view()).detections) poses.push_back(d.pose);
+      return poses;
+    });
+    if (peer) {
+      PyramidMatcher matcher(models, 2, 5.0, 5);
+      out.opencv_detection = measure_detection(frames, truth, depth_counts, [&](const app::GrayImage& frame) {
+        std::vector<Pose> poses;
+        for (const PyramidDetection& d : matcher.detect(frame)) poses.push_back(d.pose);
+        return poses;
+      });
+    }
+  }
   if (particles) {  // gabarit track --tracker particle's defaults
     std::vector<host::PoseSample> poses;
     std::vector<double> micros;
@@ -283,10 +343,11 @@ void summary_table(const std::vector<SceneResult>& scenes, const std::string& ti
       if (scenes[0].names[m] == std::string(name)) return static_cast<int>(m);
     return -1;
   };
-  const int grid = index_of(kSession), particle = index_of(kSessionParticles);
-  if (grid >= 0 && particle >= 0) {
+  const int grid = index_of(kSession), particle = index_of(kSessionParticles), detect = index_of(kSessionDetection);
+  if (grid >= 0 && (particle >= 0 || detect >= 0)) {
     md << "| re-acquisition | occlusions re-acquired within 10 frames | search frames | mean us per search frame |\n|---|---:|---:|---:|\n";
-    for (const int m : {grid, particle}) {
+    for (const int m : {grid, particle, detect}) {
+      if (m < 0) continue;
       int occlusions = 0, within = 0;
       std::size_t frames = 0;
       double us = 0;
@@ -296,10 +357,38 @@ void summary_table(const std::vector<SceneResult>& scenes, const std::string& ti
         us += r.search_us * static_cast<double>(r.search_frames);
         frames += r.search_frames;
       }
-      md << "| " << (m == grid ? "grid search (default)" : "particle filter over the frame") << " | " << within << " of " << occlusions
+      md << "| " << (m == grid ? "grid search (default)" : m == particle ? "particle filter over the frame" : "detection over the frame")
+         << " | " << within << " of " << occlusions
          << " | " << frames << " | " << fmt(frames ? us / static_cast<double>(frames) : 0.0) << " |\n";
     }
     md << "\n";
+  }
+  // Detection: every frame searched with no starting pose.
+  if (scenes[0].detection.ran) {
+    md << "| detection (every frame, no pose) | top 1: median | worst | top 5: median | worst | frames without the target with a "
+          "detection | us per frame: mean | median over scenes |\n|---|---:|---:|---:|---:|---:|---:|---:|\n";
+    for (int which = 0; which < 2; ++which) {
+      std::vector<double> t1, t5, us;
+      int invisible = 0, false_frames = 0;
+      double mean = 0;
+      std::size_t n = 0;
+      for (const SceneResult& sr : scenes) {
+        const DetectionMeasure& d = which == 0 ? sr.detection : sr.opencv_detection;
+        if (!d.ran) continue;
+        t1.push_back(100.0 * d.top1 / std::max(1, d.visible));
+        t5.push_back(100.0 * d.top5 / std::max(1, d.visible));
+        us.push_back(d.mean_us);
+        mean += d.mean_us;
+        ++n;
+        invisible += d.invisible, false_frames += d.false_frames;
+      }
+      if (n == 0) continue;
+      const auto worst = [](const std::vector<double>& v) { return *std::min_element(v.begin(), v.end()); };
+      md << "| " << (which == 0 ? "gabarit detect (defaults)" : "OpenCV pyramid matchTemplate (2 levels, 5 deg, 5 peaks refined)") << " | "
+         << fmt(median(t1)) << "% | " << fmt(worst(t1)) << "% | " << fmt(median(t5)) << "% | " << fmt(worst(t5)) << "% | " << false_frames
+         << " of " << invisible << " | " << fmt(mean / static_cast<double>(n), 0) << " | " << fmt(median(us), 0) << " |\n";
+    }
+    md << "\nA hit: the true pose within 2 px and 1 deg (and the depth, on tilted stacks), over the visible frames.\n\n";
   }
 }
 
@@ -314,16 +403,25 @@ int run_suite(const SuiteOptions& o) {
   const auto start = Clock::now();
   std::vector<SceneResult> results;
   std::ostringstream csv;
+  std::ostringstream detection_csv;
+  detection_csv << "index,name,half,detector,visible,top1,top5,invisible,false_frames,mean_us\n";
   csv << "index,name,half,method,within_1px,within_2px,within_1deg,depth_exact,reacquired_after,reacquired_in_reach,mean_us,p99_us\n";
   for (std::uint32_t i = 0; i < scenes; ++i) {
     std::fprintf(stderr, "\rsuite: scene %u/%u", i + 1, scenes);
-    results.push_back(run_scene(i, frames, dir, o.peer, o.particles));
+    results.push_back(run_scene(i, frames, dir, o.peer, o.particles, o.detection));
     const SceneResult& r = results.back();
     for (std::size_t m = 0; m < r.methods.size(); ++m) {
       const Measure& x = r.methods[m];
       csv << r.index << "," << r.name << "," << (r.held_out ? "held-out" : "tuning") << "," << r.names[m] << "," << fmt(x.within_1px)
           << "," << fmt(x.within_2px) << "," << fmt(x.within_1deg) << "," << (x.depth < 0 ? "" : fmt(x.depth)) << ","
           << x.reacquired << "," << x.reacquired_in_reach << "," << fmt(x.mean_us) << "," << fmt(x.p99_us) << "\n";
+    }
+    for (int which = 0; which < 2; ++which) {
+      const DetectionMeasure& d = which == 0 ? r.detection : r.opencv_detection;
+      if (!d.ran) continue;
+      detection_csv << r.index << "," << r.name << "," << (r.held_out ? "held-out" : "tuning") << ","
+                    << (which == 0 ? "gabarit detect" : "OpenCV pyramid") << "," << d.visible << "," << d.top1 << "," << d.top5 << ","
+                    << d.invisible << "," << d.false_frames << "," << fmt(d.mean_us) << "\n";
     }
   }
   std::fprintf(stderr, "\n");
@@ -353,6 +451,7 @@ int run_suite(const SuiteOptions& o) {
   md << "\nWhole run: " << fmt(std::chrono::duration<double>(Clock::now() - start).count()) << " s.\n";
   std::ofstream(fs::path(o.out) / "suite.md") << md.str();
   std::ofstream(fs::path(o.out) / "suite-scenes.csv") << csv.str();
+  if (o.detection) std::ofstream(fs::path(o.out) / "suite-detection.csv") << detection_csv.str();
   std::cerr << "wrote " << (fs::path(o.out) / "suite.md").string() << "\n";
   return 0;
 }

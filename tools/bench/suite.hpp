@@ -16,6 +16,7 @@ struct SuiteOptions {
   std::uint32_t frames = 0;       // 0: 160 (quick: 60)
   bool peer = true;               // run the NCC bank too
   bool particles = true;          // run the particle filter too (gabarit track --tracker particle)
+  bool detection = true;          // detection rows: gabarit detect, OpenCV's pyramid, re-acquisition by detection
 };
 
 // Writes DIR/suite.md and DIR/suite-scenes.csv; returns the exit code.

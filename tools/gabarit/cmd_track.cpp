@@ -11,13 +11,14 @@
 #include "gabarit/app/image_io.hpp"
 #include "gabarit/app/files.hpp"
 #include "gabarit/app/scratch.hpp"
+#include "gabarit/host/detection_run.hpp"
 #include "gabarit/host/particle_run.hpp"
 #include "gabarit/host/tracking_run.hpp"
 
 namespace gabarit::cli {
 
 int track(const std::vector<std::string>& argv) {
-  app::Args args("track", "--table T --frames SEQ --init X,Y[,THETA[,DEPTH]] [--plain | --tracker particle] [-o POSES.csv] [--stats STATS.json]",
+  app::Args args("track", "--table T --frames SEQ [--init X,Y[,THETA[,DEPTH]]] [--plain | --tracker particle] [-o POSES.csv] [--stats STATS.json]",
             "Tracks the table's model through a sequence (a Y4M file, Cmono or 4:2:0, luma used; or a directory of\n"
             "PGM frames), streamed frame by frame. Writes frame,x,y,theta_deg,depth,votes,score,status per frame\n"
             "(to stdout without -o).\n"
@@ -28,7 +29,11 @@ int track(const std::vector<std::string>& argv) {
             "thesis's other tracker, its particle filter (chapter 3), on the table's model points.",
             {{"--table", "T", "table file", false, true},
              {"--frames", "SEQ", "Y4M file or directory of .pgm frames", false, true},
-             {"--init", "X,Y[,THETA[,DEPTH]]", "pose before the first frame (image position of the reference point)", false, true},
+             {"--init", "X,Y[,THETA[,DEPTH]]", "pose before the first frame (image position of the reference point); without it\n"
+              "                          the model is found by detection (gabarit detect) in the first frames: rows\n"
+              "                          before it is found are lost, at 0,0"},
+             {"--theta-range", "A:B", "detection (no --init, --recovery detect): absolute angles searched (default -180:180)"},
+             {"--min-score", "S", "detection: the lowest verified score accepted, 0..1 (default 0.5)"},
              {"--plain", "", "the thesis's loop: the best cell of each frame, no filter, refinement, recovery or\n"
               "                          focus stack (add --motion-filter, --refine or --recover to it one by one)"},
              {"--binary", "", "use the binary detector on frames whatever the table says"},
@@ -52,9 +57,9 @@ int track(const std::vector<std::string>& argv) {
                                                   "frame's depth (and the reported angle) by intensity (normalised\n"
                                                   "cross-correlation) at the tracked pose"},
              {"--no-focus-stack", "", "ignore the table's model images: depth from the winning stencils only"},
-             {"--recovery", "grid|particle", "how the session re-acquires a lost target: the grid search around where it\n"
-              "                          was last seen (default), or a particle filter over the whole frame\n"
-              "                          (docs/particle-filter.md), whose best modes the table verifies"},
+             {"--recovery", "grid|detect|particle", "how the session re-acquires a lost target: the grid search around where it\n"
+              "                          was last seen (default), detection over the whole frame (docs/detection.md),\n"
+              "                          or a particle filter over the whole frame (docs/particle-filter.md)"},
              {"--tracker", "stencil|particle", "stencil (default): the stencil session above; particle: the thesis's\n"
               "                          particle filter (chapter 3, docs/particle-filter.md) with the table's model"},
              {"--particles", "N", "--tracker particle, --recovery particle: particles, 1..1000000 (default 1000)"},
@@ -73,7 +78,8 @@ int track(const std::vector<std::string>& argv) {
   if (!args.parse(argv)) return 0;
   const app::TableFile table_file(args.get("--table"));
   const TableView& table = table_file.view();
-  const Pose pose = app::parse_init_pose(args.get("--init"), table, "--init");
+  const bool detect_first = !args.has("--init");
+  const Pose pose = detect_first ? Pose{} : app::parse_init_pose(args.get("--init"), table, "--init");
   const std::string tracker = args.get_or("--tracker", "stencil");
   if (tracker != "stencil" && tracker != "particle") throw app::UsageError("--tracker '" + tracker + "': want stencil or particle");
   const bool particle = tracker == "particle";
@@ -117,9 +123,21 @@ int track(const std::vector<std::string>& argv) {
     po.edge_stride = static_cast<std::uint32_t>(args.integer("--edge-stride", po.edge_stride, 1, 64));
     po.edge_tolerance = static_cast<std::uint32_t>(args.integer("--edge-tolerance", po.edge_tolerance, 0, 3));
     if (args.has("--without")) host::switch_off_improvements(args.get("--without"), po.filter, "--without");
+  } else if (recovery == "detect") {
+    if (!options.session.recover) throw app::UsageError("--recovery detect needs recovery: drop --plain or add --recover");
+    if (args.has("--coarse")) throw app::UsageError("--recovery detect replaces the --coarse search; give one of them");
+    options.detection_recovery = true;
   } else if (recovery != "grid") {
-    throw app::UsageError("--recovery '" + recovery + "': want grid or particle");
+    throw app::UsageError("--recovery '" + recovery + "': want grid, detect or particle");
   }
+  options.detect_first = detect_first;
+  if ((args.has("--theta-range") || args.has("--min-score")) && !options.detection_recovery && !detect_first)
+    throw app::UsageError("--theta-range and --min-score apply to detection: without --init, or with --recovery detect");
+  if (detect_first && (particle || options.threads > 1))
+    throw app::UsageError("--tracker particle and --threads need --init");
+  options.finder = host::finder_options_from(args, table);
+  options.finder.max_count = 1;
+  options.finder.candidates = FinderOptions{}.candidates;
   options.session.recovery.budget = static_cast<std::uint32_t>(args.integer("--search-budget", 0, 1, 558));
   options.session.recovery.interval = static_cast<std::uint32_t>(args.integer("--search-interval", 1, 1, 100));
   options.session.recovery.screen_stride = static_cast<std::uint32_t>(args.integer("--screen-stride", 2, 1, 16));

@@ -12,6 +12,7 @@ int tables_inspect(const std::vector<std::string>& args);
 int tables_analyse(const std::vector<std::string>& args);
 int tables_export_hdl(const std::vector<std::string>& args);
 int synth(const std::vector<std::string>& args);
+int detect(const std::vector<std::string>& args);
 int track(const std::vector<std::string>& args);
 int eval(const std::vector<std::string>& args);
 int vectors(const std::vector<std::string>& args);

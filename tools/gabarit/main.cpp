@@ -24,6 +24,7 @@ constexpr const char* kUsage =
     "  tables analyse   margins of error, robustness and overlap of a table (JSON, SVG)\n"
     "  tables export-hdl  memory images and a package for the hardware voter\n"
     "  synth            write a synthetic sequence with ground truth\n"
+    "  detect           find a model anywhere in an image or in each frame of a sequence\n"
     "  track            track a model through a sequence\n"
     "  eval             compare tracked poses with ground truth\n"
     "  vectors          write the cross-target test vectors (table, frames, expected results)\n"
@@ -68,6 +69,7 @@ int main(int argc, char** argv) {
       throw gabarit::app::UsageError("tables: unknown subcommand '" + sub + "' (want build, inspect, analyse or export-hdl)");
     }
     if (command == "synth") return gabarit::cli::synth(args);
+    if (command == "detect") return gabarit::cli::detect(args);
     if (command == "track") return gabarit::cli::track(args);
     if (command == "eval") return gabarit::cli::eval(args);
     if (command == "vectors") return gabarit::cli::vectors(args);

@@ -51,6 +51,27 @@ static_assert(kMaxGradientMagnitude == table_format::kMaxDetectorThreshold, "a t
 // Sobel |gx| + |gy| at (x, y); 0 on the image border. Precondition: image.valid(), x < width, y < height.
 std::uint16_t gradient_magnitude(const ImageView& image, std::uint32_t x, std::uint32_t y) noexcept;
 
+// The 3x3 Sobel gradient at (x, y) (x to the right, y down); 0 on the image
+// border. Precondition: image.valid(), x < width, y < height.
+struct SobelGradient {
+  std::int32_t gx = 0;
+  std::int32_t gy = 0;
+};
+SobelGradient sobel_gradient(const ImageView& image, std::uint32_t x, std::uint32_t y) noexcept;
+
+// The gradient's orientation modulo 180 degrees (an edge's orientation,
+// whichever side is brighter), in 256ths of a half turn: 0 for a gradient
+// along +x or -x, 128 along +y or -y.
+// Integer comparisons against a fixed table of directions, so every target
+// gets the same value. (0, 0) gives 0.
+inline constexpr std::uint32_t kOrientationSteps = 256;  // per half turn
+std::uint8_t orientation_256(std::int32_t gx, std::int32_t gy) noexcept;
+// Orientation channels: the 256 steps in kOrientationChannels bins of 11.25 degrees.
+inline constexpr std::uint32_t kOrientationChannels = 16;
+constexpr std::uint8_t orientation_channel(std::uint8_t orientation) noexcept {
+  return static_cast<std::uint8_t>(orientation >> 4);
+}
+
 Status extract_binary(const ImageView& image, const ImageWindow& window, std::span<RoiPoint> out,
                       FeatureCount& count) noexcept;
 

@@ -17,6 +17,7 @@
 #include <span>
 
 #include "gabarit/depth_by_intensity.hpp"
+#include "gabarit/model_finder.hpp"
 #include "gabarit/motion_filter.hpp"
 #include "gabarit/particle_recovery.hpp"
 #include "gabarit/recovery_search.hpp"
@@ -93,6 +94,11 @@ class TrackingSession {
   // to stop), lost frames re-acquire through it (particle_recovery.hpp)
   // instead of the grid search; its result is accepted by the same rule.
   void use_particle_recovery(ParticleRecovery* stage) noexcept { particles_ = stage; }
+  // With a detection stage (model_finder.hpp; must outlive the session;
+  // nullptr to stop), lost frames re-acquire by detection over the whole
+  // frame; its result is accepted by the same rule. It takes precedence over
+  // a particle stage.
+  void use_detection_recovery(DetectionRecovery* stage) noexcept { detection_ = stage; }
 
   const Pose& pose() const noexcept { return pose_; }
   float reference_score() const noexcept { return filter_.reference(); }
@@ -130,6 +136,7 @@ class TrackingSession {
   bool lost_ = false;
   const FocusStack* stack_ = nullptr;
   ParticleRecovery* particles_ = nullptr;
+  DetectionRecovery* detection_ = nullptr;
   float depth_margin_ = 0.0f;  // this frame's measurement's (0 without one)
 };
 

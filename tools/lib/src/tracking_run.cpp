@@ -78,7 +78,8 @@ void run_tracking(const TableView& table, app::FrameSource& frames, const Pose& 
   app::SessionBuffers buffers(table, options.coarse, options.voter,
                               options.session.recover && options.shared_search_features);
   const SessionScratch scratch = buffers.scratch();
-  TrackingSession session(table, options.coarse, options.detector ? *options.detector : detector_of(table));
+  const Detector detector = options.detector ? *options.detector : detector_of(table);
+  TrackingSession session(table, options.coarse, detector);
   if (const Status s = session.start(options.session, init); s != Status::kOk) {
     throw app::Error(std::string("tracking options or initial pose rejected: ") + status_name(s));
   }
@@ -108,7 +109,45 @@ void run_tracking(const TableView& table, app::FrameSource& frames, const Pose& 
   std::optional<ParticleRecovery> particle_recovery;
   if (options.particle_recovery && !options.session.recover) throw app::Error("particle recovery needs recovery on");
   if (options.particle_recovery && !valid(options.particle_recovery_options)) throw app::Error("particle recovery: invalid options");
+  if (options.detection_recovery && !options.session.recover) throw app::Error("detection recovery needs recovery on");
+  if ((options.detection_recovery || options.detect_first) && !valid(options.finder)) throw app::Error("detection: invalid options");
+  // The finder and its buffers, made at the first frame (they are the frame's size).
+  ModelFinder finder(table, detector);
+  if (options.table_focus_stack) finder.use_focus_stack(stored.get());
+  std::optional<app::FinderBuffers> finder_buffers;
+  std::optional<DetectionRecovery> detection_recovery;
+  bool started = !options.detect_first;
+  double detect_micros = 0;  // the first frame's detection, counted in its time
   for (std::uint32_t index = 0; frames.next(frame); ++index) {
+    if ((options.detection_recovery || options.detect_first) &&
+        (!finder_buffers || finder_buffers->width() != frame.width || finder_buffers->height() != frame.height)) {
+      finder_buffers.emplace(table, detector, options.finder, frame.width, frame.height);
+      if (options.detection_recovery) {
+        detection_recovery.emplace(finder, options.finder, finder_buffers->scratch(scratch.fine), options.detection_interval);
+        session.use_detection_recovery(&*detection_recovery);
+      }
+    }
+    if (!started) {
+      // Detect until found; the session starts at the detection and tracks this frame from it.
+      FinderOptions one = options.finder;
+      one.max_count = 1;
+      Detection found[1];
+      std::uint32_t count = 0;
+      const auto t0 = std::chrono::steady_clock::now();
+      if (const Status s = finder.find(frame.view(), one, finder_buffers->scratch(scratch.fine), found, count); s != Status::kOk)
+        throw app::Error("frame " + std::to_string(index) + ": detection failed: " + status_name(s));
+      if (count == 0) {
+        row = app::TrackRow{};
+        row.frame = index;
+        row.micros = std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count();
+        on_row(row);
+        continue;
+      }
+      if (const Status s = session.start(options.session, found[0].pose); s != Status::kOk)
+        throw app::Error(std::string("the session rejected the detected pose: ") + status_name(s));
+      started = true;
+      detect_micros = std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count();
+    }
     if (options.particle_recovery && !particles) {
       particles = std::make_unique<ParticleTracker>(table, frame.width, frame.height, options.particles);
       particles->start(init);
@@ -123,7 +162,8 @@ void run_tracking(const TableView& table, app::FrameSource& frames, const Pose& 
       throw app::Error("frame " + std::to_string(index) + ": tracking failed: " + status_name(status));
     }
     row.frame = index;
-    row.micros = std::chrono::duration<double, std::micro>(stop - start).count();
+    row.micros = std::chrono::duration<double, std::micro>(stop - start).count() + detect_micros;
+    detect_micros = 0;
     app::fill_row(row, result);
     on_row(row);
   }

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "gabarit/depth_by_intensity.hpp"
+#include "gabarit/model_finder.hpp"
 #include "gabarit/table_view.hpp"
 #include "gabarit/tracker.hpp"
 #include "gabarit/tracking_session.hpp"
@@ -51,6 +52,29 @@ class SessionBuffers {
   TrackerBuffers fine_;
   std::optional<TrackerBuffers> coarse_;
   std::vector<RoiPoint> search_features_;
+};
+
+// Scratch for a ModelFinder (model_finder.hpp) on frames of one size with
+// one set of options; the fine table's tracker scratch is the caller's
+// (a session's, or a TrackerBuffers). Frames of another size need new buffers.
+class FinderBuffers {
+ public:
+  FinderBuffers(const TableView& table, const Detector& detector, const FinderOptions& options, std::uint32_t width,
+                std::uint32_t height);
+  FinderScratch scratch(TrackerScratch fine);
+  const FinderGeometry& geometry() const { return geometry_; }
+  std::uint32_t width() const { return width_; }
+  std::uint32_t height() const { return height_; }
+
+ private:
+  FinderGeometry geometry_;
+  std::uint32_t width_ = 0, height_ = 0;
+  std::vector<std::uint8_t> coarse_image_;
+  std::vector<RoiPoint> coarse_features_;
+  std::vector<std::int32_t> feature_index_;
+  std::vector<std::uint16_t> accumulator_;
+  std::vector<OrientedPoint> model_;
+  std::vector<std::int32_t> rotated_;
 };
 
 // The session a program runs: the defaults (SessionOptions{}), or with

@@ -13,6 +13,7 @@
 #include "gabarit/app/pose_row.hpp"
 #include "gabarit/app/scratch.hpp"
 #include "gabarit/host/particle_run.hpp"
+#include "gabarit/model_finder.hpp"
 #include "gabarit/particle_recovery.hpp"
 #include "gabarit/table_view.hpp"
 #include "gabarit/tracker.hpp"
@@ -51,6 +52,14 @@ struct TrackingOptions {
   bool particle_recovery = false;
   ParticleRunOptions particles = recovery_particles();
   ParticleRecoveryOptions particle_recovery_options;
+  // Re-acquire by detection over the whole frame (model_finder.hpp) instead
+  // of the grid search; with recovery on. Takes precedence over particles.
+  bool detection_recovery = false;
+  // No initial pose: the first frames are searched by detection until the
+  // model is found (rows before are lost, at 0,0), then the session starts there.
+  bool detect_first = false;
+  FinderOptions finder;
+  std::uint32_t detection_interval = 1;  // with detection_recovery: detect every n-th lost frame
   static ParticleRunOptions recovery_particles() {
     ParticleRunOptions o;
     o.edge_tolerance = 0;
