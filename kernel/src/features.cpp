@@ -76,6 +76,7 @@ constexpr DirectionTable kDirections = make_directions();
 }  // namespace
 
 std::uint8_t orientation_256(std::int32_t gx, std::int32_t gy) noexcept {
+  if (gx == 0 && gy == 0) return 0;  // no edge: every direction compares equal
   // Fold into [0, 180): the upper half-plane, +x included, -x excluded.
   if (gy < 0 || (gy == 0 && gx < 0)) {
     gx = -gx;

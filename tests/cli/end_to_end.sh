@@ -19,7 +19,7 @@ expect() {
 
 # Help everywhere, exit 0. (Into a file first: grep -q closing the pipe
 # early would fail a long help's write under pipefail.)
-for cmd in "tables build" "tables inspect" "tables analyse" synth track eval vectors; do
+for cmd in "tables build" "tables inspect" "tables analyse" synth detect track eval vectors; do
   $g $cmd --help > "$work/help.txt" || fail "$cmd --help exited non-zero"
   grep -q "^usage: gabarit $cmd" "$work/help.txt" || fail "$cmd --help"
 done
@@ -155,7 +155,44 @@ $g track --recovery particle --table "$s/t.gbt" --frames "$s/frames.y4m" --init 
 $g eval --gt "$s/gt.csv" --poses "$s/pr.csv" > "$s/acc_pr.json" || fail "eval --recovery particle"
 grep -q '"reacquired_after_frames": \[[0-9]' "$s/acc_pr.json" || fail "--recovery particle: not reacquired after the occlusion: $(cat "$s/acc_pr.json")"
 expect 2 "needs recovery" $g track --recovery particle --plain --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init"
-expect 2 "want grid or particle" $g track --recovery kalman --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init"
+expect 2 "want grid, detect or particle" $g track --recovery kalman --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init"
+# Detection (docs/detection.md): the model found anywhere with no pose, in
+# every frame; tracking without --init; re-acquisition by detection.
+$g detect --table "$s/t.gbt" "$s/frames.y4m" -o "$s/det.csv" 2>/dev/null || fail "detect"
+head -1 "$s/det.csv" | grep -qx "frame,rank,x,y,theta_deg,depth,score,coarse_score,vote_score" || fail "detect: header"
+python3 - "$s/det.csv" "$s/gt.csv" <<'PY' || fail "detect: the target not found in the visible frames"
+import csv, math, sys
+det = {}
+for r in csv.DictReader(open(sys.argv[1])):
+    if r["rank"] == "0": det[int(r["frame"])] = r
+hits = visible = 0
+for g in csv.DictReader(open(sys.argv[2])):
+    if g["visible"] != "1": continue
+    visible += 1
+    d = det.get(int(g["frame"]))
+    hits += d is not None and math.hypot(float(d["x"]) - float(g["x"]), float(d["y"]) - float(g["y"])) <= 2
+sys.exit(0 if hits >= 0.9 * visible else 1)
+PY
+$g detect --table "$s/t.gbt" "$s/frames.y4m" -o "$s/det2.csv" 2>/dev/null && cmp -s "$s/det.csv" "$s/det2.csv" || fail "detect: not the same bytes twice"
+$g detect --table "$s/t.gbt" "$s/model_00.pgm" --max-count 1 > "$s/det_pgm.csv" 2>/dev/null || fail "detect a PGM"
+[ "$(wc -l < "$s/det_pgm.csv")" -le 2 ] || fail "detect --max-count 1: more than one row"
+$g track --table "$s/t.gbt" --frames "$s/frames.y4m" -o "$s/pni.csv" 2>/dev/null || fail "track without --init"
+$g eval --gt "$s/gt.csv" --poses "$s/pni.csv" > "$s/acc_ni.json" || fail "eval track without --init"
+python3 - "$s/acc_ni.json" <<'PY' || fail "track without --init lost the scene: $(cat "$s/acc_ni.json")"
+import json, sys
+a = json.load(open(sys.argv[1]))
+sys.exit(0 if a["within_2px"] >= 0.8 * a["frames"] else 1)
+PY
+$g track --recovery detect --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init" -o "$s/prd.csv" 2>/dev/null || fail "track --recovery detect"
+$g eval --gt "$s/gt.csv" --poses "$s/prd.csv" > "$s/acc_prd.json" || fail "eval --recovery detect"
+grep -q '"reacquired_after_frames": \[[0-9]' "$s/acc_prd.json" || fail "--recovery detect: not reacquired after the occlusion: $(cat "$s/acc_prd.json")"
+expect 2 "want one IMAGE" $g detect --table "$s/t.gbt"
+expect 2 "want A <= B" $g detect --table "$s/t.gbt" --theta-range 5:1 "$s/model_00.pgm"
+expect 2 "--min-score" $g detect --table "$s/t.gbt" --min-score 2 "$s/model_00.pgm"
+expect 2 "at least --max-count" $g detect --table "$s/t.gbt" --max-count 9 --candidates 3 "$s/model_00.pgm"
+expect 2 "apply to detection" $g track --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init" --min-score 0.4
+expect 2 "need --init" $g track --tracker particle --table "$s/t.gbt" --frames "$s/frames.y4m"
+expect 1 "cannot open" $g detect --table "$s/t.gbt" "$s/missing.pgm"
 $g synth --pipette-suite --scenes 1 --frames 3 -o "$work/pipettes" 2>/dev/null || fail "synth --pipette-suite"
 grep -q "^0,glass-pipette-gravel-smooth-cover-d1-s1001,tuning," "$work/pipettes/suite.csv" || fail "synth --pipette-suite: listing"
 expect 2 "want an integer in \[1, 8\]" $g synth --pipette-suite --scenes 9 -o "$work/pipettes9"

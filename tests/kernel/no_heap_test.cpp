@@ -11,6 +11,7 @@
 #include <new>
 #include <vector>
 
+#include "gabarit/app/scratch.hpp"
 #include "gabarit/dense_voter.hpp"
 #include "gabarit/features.hpp"
 #include "gabarit/app/image_io.hpp"
@@ -244,6 +245,29 @@ int main() {
       return ok && stage.frames() > 0;
     });
   }
-  std::printf("%d passed, %d failed\n", 18 - failures, failures);
+  // Detection over the whole frame, and a session re-acquiring by detection.
+  {
+    const FinderOptions fo;
+    app::FinderBuffers finder_buffers(table, detector_of(table), fo, 64, 64);
+    ModelFinder finder(table, detector_of(table));
+    Detection found[8];
+    expect_no_allocation("model finder", [&] {
+      std::uint32_t count = 0;
+      return finder.find(view, fo, finder_buffers.scratch(scratch), found, count) == Status::kOk;
+    });
+    DetectionRecovery stage(finder, fo, finder_buffers.scratch(scratch));
+    TrackingSession with_detection(table, nullptr, detector_of(table));
+    with_detection.use_detection_recovery(&stage);
+    expect_no_allocation("tracking session, re-acquisition by detection", [&] {
+      SessionResult r;
+      bool ok = with_detection.start(SessionOptions{}, Pose{32, 32, 0, 0}) == Status::kOk;
+      ok = ok && with_detection.step(view, {scratch, {}}, r) == Status::kOk;
+      for (int i = 0; i < 12 && ok; ++i) ok = with_detection.step(blank.view(), {scratch, {}}, r) == Status::kOk;
+      ok = ok && with_detection.lost();
+      for (int i = 0; i < 3 && ok; ++i) ok = with_detection.step(view, {scratch, {}}, r) == Status::kOk;
+      return ok;
+    });
+  }
+  std::printf("%d passed, %d failed\n", 20 - failures, failures);
   return failures == 0 ? 0 : 1;
 }

@@ -1,0 +1,192 @@
+// Detection anywhere (model_finder.hpp): the orientation quantiser, finding a
+// target at any place and angle, nothing found where there is nothing,
+// errors for bad input, determinism, and a session re-acquiring by detection
+// a target that reappears beyond the grid search's reach.
+#include "gabarit/model_finder.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <vector>
+
+#include "gabarit/app/scratch.hpp"
+#include "gabarit/tracking_session.hpp"
+#include "test_tables.hpp"
+
+namespace gabarit {
+namespace {
+
+constexpr std::uint32_t kSide = 320;
+
+TEST(Orientation, AxesDiagonalsAndFolding) {
+  EXPECT_EQ(orientation_256(1, 0), 0);
+  EXPECT_EQ(orientation_256(-7, 0), 0);  // a half turn away: the same edge
+  EXPECT_EQ(orientation_256(0, 5), 128);
+  EXPECT_EQ(orientation_256(0, -5), 128);
+  EXPECT_EQ(orientation_256(3, 3), 64);
+  EXPECT_EQ(orientation_256(-3, 3), 192);
+  EXPECT_EQ(orientation_256(0, 0), 0);
+  EXPECT_EQ(orientation_channel(orientation_256(0, 5)), 8);
+}
+
+TEST(Orientation, FollowsTheAngleWithinAStep) {
+  for (int tenth = 0; tenth < 3600; tenth += 7) {
+    const double a = tenth / 10.0 * M_PI / 180.0;
+    const auto gx = static_cast<std::int32_t>(std::lround(1000 * std::cos(a)));
+    const auto gy = static_cast<std::int32_t>(std::lround(1000 * std::sin(a)));
+    const double want = std::fmod(tenth / 10.0, 180.0) * 256.0 / 180.0;
+    const double got = orientation_256(gx, gy);
+    double diff = std::fabs(got + 0.5 - want);
+    diff = std::min(diff, 256.0 - diff);
+    EXPECT_LE(diff, 1.0) << tenth / 10.0 << " deg";
+    EXPECT_EQ(orientation_256(gx, gy), orientation_256(-gx, -gy));
+  }
+}
+
+struct Rig {
+  std::vector<host::Point> points;
+  std::vector<std::byte> bytes;
+  TableView table;
+  Rig() {
+    host::Rng rng(33);
+    points = testing::random_points(rng, 70, 20, 2.0);
+    // 0.5-degree cells: a detection within 1 degree is then a cell's worth.
+    bytes = testing::build(testing::point_model(points), "-4:4:9", "-4:4:9", "-2:2:9");
+    table = testing::open_table(bytes);
+  }
+  app::GrayImage frame(float x, float y, float theta, bool visible, host::Rng& noise) const {
+    app::GrayImage g = visible ? testing::draw_points(points, x, y, theta, kSide) : app::GrayImage(kSide, kSide);
+    for (auto& v : g.pixels)
+      if (noise.bernoulli(0.005)) v = static_cast<std::uint8_t>(255 - v);
+    return g;
+  }
+};
+
+double angle_error(double a, double b) { return std::fabs(std::remainder(a - b, 360.0)); }
+
+TEST(ModelFinder, FindsTheTargetAnywhereAtAnyAngle) {
+  const Rig rig;
+  ModelFinder finder(rig.table, detector_of(rig.table));
+  const FinderOptions options;
+  app::FinderBuffers buffers(rig.table, detector_of(rig.table), options, kSide, kSide);
+  testing::TrackerTestScratch fine(rig.table);
+  host::Rng where(5), noise(6);
+  for (int trial = 0; trial < 8; ++trial) {
+    const float x = static_cast<float>((40 + where.next_unit() * (kSide - 80))), y = static_cast<float>((40 + where.next_unit() * (kSide - 80)));
+    const float theta = static_cast<float>((-180 + 360 * where.next_unit()));
+    const app::GrayImage f = rig.frame(x, y, theta, true, noise);
+    std::vector<Detection> out(options.max_count);
+    std::uint32_t count = 0;
+    ASSERT_EQ(finder.find(f.view(), options, buffers.scratch(fine.view()), out, count), Status::kOk);
+    ASSERT_GE(count, 1u) << "trial " << trial;
+    EXPECT_LE(std::hypot(out[0].pose.x - x, out[0].pose.y - y), 2.0) << "trial " << trial;
+    // Points at most ~28 px out, drawn to whole pixels: 2 degrees move the
+    // farthest by a pixel, which is as far as a binary frame pins the angle.
+    EXPECT_LE(angle_error(out[0].pose.theta_deg, theta), 2.0) << "trial " << trial << ": " << out[0].pose.theta_deg << " vs " << theta;
+    EXPECT_GE(out[0].score, options.min_score);
+    for (std::uint32_t i = 1; i < count; ++i) {
+      EXPECT_LE(out[i].score, out[i - 1].score);  // best first
+      EXPECT_GE(std::hypot(out[i].pose.x - out[0].pose.x, out[i].pose.y - out[0].pose.y),
+                buffers.geometry().min_distance_px);  // no duplicates
+    }
+  }
+}
+
+TEST(ModelFinder, NothingFoundWhereThereIsNothing) {
+  const Rig rig;
+  ModelFinder finder(rig.table, detector_of(rig.table));
+  const FinderOptions options;
+  app::FinderBuffers buffers(rig.table, detector_of(rig.table), options, kSide, kSide);
+  testing::TrackerTestScratch fine(rig.table);
+  host::Rng noise(8);
+  std::vector<Detection> out(options.max_count);
+  std::uint32_t count = 7;
+  const app::GrayImage f = rig.frame(0, 0, 0, false, noise);
+  ASSERT_EQ(finder.find(f.view(), options, buffers.scratch(fine.view()), out, count), Status::kOk);
+  EXPECT_EQ(count, 0u);
+}
+
+TEST(ModelFinder, SameInputSameBytes) {
+  const Rig rig;
+  ModelFinder finder(rig.table, detector_of(rig.table));
+  const FinderOptions options;
+  app::FinderBuffers buffers(rig.table, detector_of(rig.table), options, kSide, kSide);
+  testing::TrackerTestScratch fine(rig.table);
+  host::Rng noise(9);
+  const app::GrayImage f = rig.frame(150, 170, 77, true, noise);
+  std::vector<Detection> a(options.max_count), b(options.max_count);
+  std::uint32_t na = 0, nb = 0;
+  ASSERT_EQ(finder.find(f.view(), options, buffers.scratch(fine.view()), a, na), Status::kOk);
+  ASSERT_EQ(finder.find(f.view(), options, buffers.scratch(fine.view()), b, nb), Status::kOk);
+  ASSERT_EQ(na, nb);
+  EXPECT_EQ(std::memcmp(a.data(), b.data(), na * sizeof(Detection)), 0);
+}
+
+TEST(ModelFinder, RefusesBadInputAndShortBuffers) {
+  const Rig rig;
+  ModelFinder finder(rig.table, detector_of(rig.table));
+  FinderOptions options;
+  app::FinderBuffers buffers(rig.table, detector_of(rig.table), options, kSide, kSide);
+  testing::TrackerTestScratch fine(rig.table);
+  host::Rng noise(10);
+  const app::GrayImage f = rig.frame(100, 100, 0, true, noise);
+  std::vector<Detection> out(options.max_count);
+  std::uint32_t count = 0;
+  EXPECT_EQ(finder.find(ImageView{}, options, buffers.scratch(fine.view()), out, count), Status::kInvalidArgument);
+  EXPECT_EQ(finder.find(f.view(), options, buffers.scratch(fine.view()), std::span<Detection>(out).first(1), count),
+            Status::kBufferTooSmall);
+  FinderScratch shorter = buffers.scratch(fine.view());
+  shorter.accumulator = shorter.accumulator.first(shorter.accumulator.size() - 1);
+  EXPECT_EQ(finder.find(f.view(), options, shorter, out, count), Status::kBufferTooSmall);
+  // A larger frame than the buffers were sized for.
+  const app::GrayImage big(kSide + 64, kSide);
+  EXPECT_EQ(finder.find(big.view(), options, buffers.scratch(fine.view()), out, count), Status::kBufferTooSmall);
+  std::vector<FinderOptions> bad(5, options);
+  bad[0].candidates = 0;
+  bad[1].max_count = bad[1].candidates + 1;
+  bad[2].min_score = 1.5f;
+  bad[3].theta_max_deg = bad[3].theta_min_deg - 1;
+  bad[4].pyramid_factor = kMaxPyramidFactor + 1;
+  for (const FinderOptions& o : bad) {
+    EXPECT_FALSE(valid(o));
+    EXPECT_EQ(finder.find(f.view(), o, buffers.scratch(fine.view()), out, count), Status::kInvalidArgument);
+  }
+  options.coarse_depth = 1;  // the table has one depth
+  EXPECT_EQ(finder.find(f.view(), options, buffers.scratch(fine.view()), out, count), Status::kInvalidArgument);
+}
+
+// Frames until the session is within 2 px of the target after it reappears at
+// (rx, ry), or -1 within `budget` frames.
+int reacquire(const Rig& rig, bool detection, float rx, float ry, int budget = 10) {
+  testing::TrackerTestScratch scratch(rig.table);
+  TrackingSession session(rig.table, nullptr, detector_of(rig.table));
+  EXPECT_EQ(session.start(SessionOptions{}, {60, 60, 0, 0}), Status::kOk);
+  ModelFinder finder(rig.table, detector_of(rig.table));
+  const FinderOptions options;
+  app::FinderBuffers buffers(rig.table, detector_of(rig.table), options, kSide, kSide);
+  DetectionRecovery stage(finder, options, buffers.scratch(scratch.view()));
+  if (detection) session.use_detection_recovery(&stage);
+  host::Rng noise(4);
+  SessionResult r;
+  for (int f = 0; f < 4; ++f) EXPECT_EQ(session.step(rig.frame(60, 60, 0, true, noise).view(), {scratch.view(), {}}, r), Status::kOk);
+  for (int f = 0; f < 12; ++f) EXPECT_EQ(session.step(rig.frame(0, 0, 0, false, noise).view(), {scratch.view(), {}}, r), Status::kOk);
+  EXPECT_TRUE(session.lost());
+  for (int f = 0; f < budget; ++f) {
+    EXPECT_EQ(session.step(rig.frame(rx, ry, 40, true, noise).view(), {scratch.view(), {}}, r), Status::kOk);
+    if (!session.lost() && std::hypot(session.pose().x - rx, session.pose().y - ry) <= 2.0) return f + 1;
+  }
+  return -1;
+}
+
+TEST(DetectionRecovery, FindsATargetThatReappearsFarAway) {
+  const Rig rig;
+  // 200 px and 40 deg from where it was lost: beyond the grid's reach.
+  EXPECT_EQ(reacquire(rig, false, 260, 250), -1);
+  const int frames = reacquire(rig, true, 260, 250);
+  EXPECT_GE(frames, 1);
+  EXPECT_LE(frames, 3);
+}
+
+}  // namespace
+}  // namespace gabarit
