@@ -17,7 +17,7 @@ TrackerBuffers::TrackerBuffers(const TableView& table, VoterChoice voter)
                 std::to_string(table.cell_count()));
   }
   if (voter == VoterChoice::kDense || (voter == VoterChoice::kAuto && dense_voter_pays_off(table))) {
-    masks_.resize(dense_mask_words(table.roi_pixels(), table.cell_count()));
+    masks_.resize(dense_mask_words(table.roi_slots(), table.cell_count()));
     dense_scratch_.resize(dense_scratch_words(table.cell_count()));
     if (build_dense_masks(table, masks_) != Status::kOk) throw Error("internal error: building dense masks failed");
   } else if (table.offset_delta_bytes() != 0) {

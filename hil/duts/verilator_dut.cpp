@@ -65,7 +65,7 @@ class VoterDut {
       : table_(table), fits_(fits), buffers_(table, app::VoterChoice::kCsr), voter_({}, kCells, kRefsPerLane) {
     if (fits_) voter_.load(host::hdl_layout(table, kLanes), kLanes);
     voter_.model().cell_count_i = table.cell_count();
-    voter_.model().roi_width_i = table.roi_width();
+    voter_.model().roi_width_i = table.roi_width() * table.orientation_channels();  // slots per row (hdl_features)
     voter_.model().roi_height_i = table.roi_height();
   }
 
@@ -88,7 +88,8 @@ class VoterDut {
       endpoint.report_failure(link::EventKind::kError, link::EventReason::kTracking, static_cast<std::uint32_t>(s), now());
       return true;
     }
-    const std::vector<RoiPoint> features(scratch.features.begin(), scratch.features.begin() + prepared.features);
+    const std::vector<RoiPoint> features =
+        host::hdl_features(table_, std::span<const RoiPoint>(scratch.features).first(prepared.features));
     hdl::Outcome hw;
     try {
       hw = voter_.frame(features, table_.cell_count(), 0.0, rng_);
@@ -98,7 +99,7 @@ class VoterDut {
       return true;
     }
     std::copy(hw.counters.begin(), hw.counters.end(), scratch.counters.begin());
-    const VoteTally tally{hw.features, hw.votes};
+    const VoteTally tally{table_.channel_bits() != 0 ? hw.features / 2 : hw.features, hw.votes};  // two slots per feature with channels
     StepResult step;
     if (const Status s = finish_frame(table_, pose_, prepared, scratch.counters, tally, step); s != Status::kOk) {
       endpoint.report_failure(link::EventKind::kError, link::EventReason::kTracking, static_cast<std::uint32_t>(s), now());

@@ -89,7 +89,7 @@ class SlicedCounters {
 Status check(const TableView& table, std::span<const std::uint64_t> masks, std::span<VoteCounter> counters,
              std::span<std::uint64_t> scratch) noexcept {
   if (table.cell_count() == 0 || table.cell_count() > kDenseMaxCells) return Status::kInvalidArgument;
-  if (masks.size() != dense_mask_words(table.roi_pixels(), table.cell_count()) ||
+  if (masks.size() != dense_mask_words(table.roi_slots(), table.cell_count()) ||
       counters.size() != voter_counter_count(table.cell_count()) ||
       scratch.size() < dense_scratch_words(table.cell_count())) {
     return Status::kBufferTooSmall;
@@ -102,9 +102,9 @@ Status check(const TableView& table, std::span<const std::uint64_t> masks, std::
 Status build_dense_masks(const TableView& table, std::span<std::uint64_t> masks) noexcept {
   if (table.cell_count() == 0 || table.cell_count() > kDenseMaxCells) return Status::kInvalidArgument;
   const std::size_t words = dense_words_per_pixel(table.cell_count());
-  if (masks.size() != dense_mask_words(table.roi_pixels(), table.cell_count())) return Status::kBufferTooSmall;
+  if (masks.size() != dense_mask_words(table.roi_slots(), table.cell_count())) return Status::kBufferTooSmall;
   for (std::uint64_t& m : masks) m = 0;
-  for (std::uint32_t p = 0; p < table.roi_pixels(); ++p) {
+  for (std::uint32_t p = 0; p < table.roi_slots(); ++p) {  // one mask per slot (pixel, or pixel and channel)
     for (std::uint32_t i = table.references_begin(p); i < table.references_begin(p + 1); ++i) {
       const std::uint32_t cell = table.reference(i);
       masks[p * words + cell / 64] |= std::uint64_t{1} << (cell % 64);
@@ -117,23 +117,31 @@ Status accumulate_votes_dense(const TableView& table, std::span<const std::uint6
                               std::span<const RoiPoint> features, std::span<VoteCounter> counters,
                               std::span<std::uint64_t> scratch, VoteTally& tally) noexcept {
   GABARIT_TRY(check(table, masks, counters, scratch));
-  const std::uint16_t w = table.roi_width(), h = table.roi_height();
+  const std::uint32_t w = table.roi_width(), h = table.roi_height(), bits = table.channel_bits();
   for (const RoiPoint& f : features) {
-    if (f.col >= w || f.row >= h) return Status::kFeatureOutOfRoi;
+    if ((std::uint32_t{f.col} >> bits) >= w || f.row >= h) return Status::kFeatureOutOfRoi;
   }
   const std::size_t words = dense_words_per_pixel(table.cell_count());
-  const auto mask_of = [&](const RoiPoint& f) { return masks.data() + (std::size_t{f.row} * w + f.col) * words; };
+  // Items: one mask per feature, or with orientation channels two (its
+  // channel's slot, then the neighbour's), in the CSR voter's order.
+  const std::size_t items = features.size() << (bits != 0 ? 1 : 0);
+  const auto mask_of = [&](std::size_t item) {
+    if (bits == 0) return masks.data() + (std::size_t{features[item].row} * w + features[item].col) * words;
+    const RoiPoint& f = features[item >> 1];
+    const FeatureSlots s = feature_slots(f.col, f.row, w, bits);
+    return masks.data() + std::size_t{(item & 1) ? s.second : s.first} * words;
+  };
   SlicedCounters sliced(scratch, words);
   std::uint64_t votes = 0;
-  for (std::size_t start = 0; start < features.size(); start += kBlock) {
-    const std::size_t end = start + kBlock < features.size() ? start + kBlock : features.size();
+  for (std::size_t start = 0; start < items; start += kBlock) {
+    const std::size_t end = start + kBlock < items ? start + kBlock : items;
     std::size_t i = start;
     for (; i + 8 <= end; i += 8) {
       const std::uint64_t* m[8];
-      for (int k = 0; k < 8; ++k) m[k] = mask_of(features[i + static_cast<std::size_t>(k)]);
+      for (int k = 0; k < 8; ++k) m[k] = mask_of(i + static_cast<std::size_t>(k));
       sliced.add8(m);
     }
-    for (; i < end; ++i) sliced.add1(mask_of(features[i]));
+    for (; i < end; ++i) sliced.add1(mask_of(i));
     votes += sliced.flush(counters);
   }
   tally.features += static_cast<std::uint32_t>(features.size());

@@ -93,6 +93,27 @@ std::uint8_t orientation_256(std::int32_t gx, std::int32_t gy) noexcept {
   return static_cast<std::uint8_t>(lo);
 }
 
+std::uint8_t edge_orientation_at(const ImageView& img, std::int32_t px, std::int32_t py) noexcept {
+  SobelGradient best{};
+  std::int32_t best_mag = -1;
+  for (std::int32_t ring = 0; ring <= 1 && best_mag <= 0; ++ring) {
+    // ring 0: the point itself; 1: its neighbours (only if the point has no gradient).
+    for (std::int32_t oy = -ring; oy <= ring; ++oy)
+      for (std::int32_t ox = -ring; ox <= ring; ++ox) {
+        if (ring == 1 && ox == 0 && oy == 0) continue;
+        const std::int32_t x = px + ox, y = py + oy;
+        if (x < 0 || y < 0 || static_cast<std::uint32_t>(x) >= img.width || static_cast<std::uint32_t>(y) >= img.height) continue;
+        const SobelGradient g = sobel_gradient(img, static_cast<std::uint32_t>(x), static_cast<std::uint32_t>(y));
+        const std::int32_t mag = abs32(g.gx) + abs32(g.gy);
+        if (mag > best_mag) {
+          best_mag = mag;
+          best = g;
+        }
+      }
+  }
+  return orientation_256(best.gx, best.gy);
+}
+
 Status extract_binary(const ImageView& image, const ImageWindow& window, std::span<RoiPoint> out,
                       FeatureCount& count) noexcept {
   GABARIT_TRY(check(image, window));

@@ -28,31 +28,10 @@ std::uint32_t first_point(const TableView& table, std::uint16_t depth) noexcept 
   return first;
 }
 
-// The orientation of the model image's edge at model point m: the Sobel
-// gradient there, or, where it vanishes (a point between two edge pixels),
-// the strongest of its 8 neighbours'.
+// The orientation of the model image's edge at model point m.
 std::uint8_t model_orientation(const TableView& table, std::uint16_t depth, const ModelPoint& m) noexcept {
-  const ImageView img = table.model_image(depth);
-  const std::int32_t px = round_to_int(table.model_ref_x() + static_cast<float>(m.x));
-  const std::int32_t py = round_to_int(table.model_ref_y() + static_cast<float>(m.y));
-  SobelGradient best{};
-  std::int32_t best_mag = -1;
-  for (std::int32_t dy = 0; dy <= 2 && best_mag <= 0; ++dy) {
-    // dy 0: the point itself; 1, 2: its neighbours (only if the point has none).
-    for (std::int32_t oy = -1; oy <= 1; ++oy)
-      for (std::int32_t ox = -1; ox <= 1; ++ox) {
-        if ((dy == 0) != (ox == 0 && oy == 0)) continue;
-        const std::int32_t x = px + ox, y = py + oy;
-        if (x < 0 || y < 0 || static_cast<std::uint32_t>(x) >= img.width || static_cast<std::uint32_t>(y) >= img.height) continue;
-        const SobelGradient g = sobel_gradient(img, static_cast<std::uint32_t>(x), static_cast<std::uint32_t>(y));
-        const std::int32_t mag = (g.gx < 0 ? -g.gx : g.gx) + (g.gy < 0 ? -g.gy : g.gy);
-        if (mag > best_mag) {
-          best_mag = mag;
-          best = g;
-        }
-      }
-  }
-  return orientation_256(best.gx, best.gy);
+  return edge_orientation_at(table.model_image(depth), round_to_int(table.model_ref_x() + static_cast<float>(m.x)),
+                             round_to_int(table.model_ref_y() + static_cast<float>(m.y)));
 }
 
 bool point_before(const OrientedPoint& a, const OrientedPoint& b, bool orientation) noexcept {

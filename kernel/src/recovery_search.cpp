@@ -133,7 +133,7 @@ Status RecoverySearch::run(const ImageView& image, const RecoveryOptions& option
       // slowly, and edges differ little between neighbouring depths); the
       // shortlist is voted over every depth below.
       PreparedFrame frame;
-      GABARIT_TRY(map_features(fine_, detected, searched, p, scratch.fine, frame));
+      GABARIT_TRY(map_features(fine_, image, detected, searched, p, scratch.fine, frame));
       for (std::uint32_t c = screened.begin; c < screened.end; ++c) scratch.fine.counters[c] = 0;
       VoteTally tally;
       GABARIT_TRY(accumulate_votes_for_cells(fine_, scratch.fine.features.first(frame.features), scratch.fine.counters,

@@ -56,7 +56,7 @@ bool refine_by_alignment(const TableView& table, std::span<const RoiPoint> featu
   // The features as a bitmap over the ROI.
   for (std::size_t i = 0; i < (std::size_t{w} * h + 7) / 8; ++i) occupancy[i] = 0;
   for (const RoiPoint& f : features) {
-    const std::size_t at = std::size_t{f.row} * w + f.col;
+    const std::size_t at = std::size_t{f.row} * w + table.feature_column(f);  // the pixel, whatever its channel
     occupancy[at >> 3] = static_cast<std::uint8_t>(occupancy[at >> 3] | (1u << (at & 7u)));
   }
   const auto feature_at = [&](std::int32_t col, std::int32_t row) {

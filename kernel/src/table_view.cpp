@@ -176,12 +176,15 @@ Status TableView::open(std::span<const std::byte> bytes, TableView& out) noexcep
   const std::uint8_t delta_bytes = load_le<std::uint8_t>(b + off::kOffsetDeltaBytes);
   const std::uint8_t block_log2 = load_le<std::uint8_t>(b + off::kOffsetBlockLog2);
   const std::uint32_t delta_count = load_le<std::uint32_t>(b + off::kOffsetDeltaCount);
+  const bool channels_flag = (flags & table_format::kFlagOrientationChannels) != 0;
+  const std::uint8_t channels_field = load_le<std::uint8_t>(b + off::kOrientationChannels);
   if ((flags & ~table_format::kKnownFlags) != 0 || (has_images && minor < 1) || (compact && minor < 2) ||
+      (channels_flag ? minor < 3 || !table_format::valid_orientation_channels(channels_field) : channels_field != 0) ||
       load_le<std::uint16_t>(b + off::kReserved58) != 0 ||
       (!has_images && load_le<std::uint32_t>(b + off::kModelImagesOffset) != 0) ||
       (compact ? (delta_bytes != 1 && delta_bytes != 2) || block_log2 != table_format::kOffsetBlockLog2
                : delta_bytes != 0 || block_log2 != 0 || delta_count != 0) ||
-      load_le<std::uint16_t>(b + off::kReserved146) != 0 ||
+      load_le<std::uint8_t>(b + off::kReserved147) != 0 ||
       !all_zero(b + off::kReserved152, table_format::kHeaderBytes - off::kReserved152)) {
     return Status::kBadHeaderField;
   }
@@ -194,13 +197,14 @@ Status TableView::open(std::span<const std::byte> bytes, TableView& out) noexcep
   const std::uint32_t model_point_count = load_le<std::uint32_t>(b + off::kModelPointCount);
   const std::uint16_t depth_count = load_le<std::uint16_t>(b + off::kDepthCount);
 
+  const std::uint32_t channels = channels_flag ? channels_field : 1u;
   if (cell_count > table_format::kMaxCells || reference_count > table_format::kMaxReferences ||
-      std::uint32_t{roi_width} * roi_height > table_format::kMaxRoiPixels ||
+      std::uint64_t{roi_width} * roi_height * channels > table_format::kMaxRoiPixels ||
       model_point_count > table_format::kMaxModelPoints || depth_count > table_format::kMaxDepths) {
     return Status::kCountTooLarge;
   }
   if (cell_count == 0 || roi_width == 0 || roi_height == 0 || depth_count == 0) return Status::kBadHeaderField;
-  if (delta_count > std::uint32_t{roi_width} * roi_height) return Status::kBadHeaderField;
+  if (delta_count > std::uint32_t{roi_width} * roi_height * channels) return Status::kBadHeaderField;
   if (reference_bytes != table_format::narrowest_reference_bytes(cell_count)) return Status::kBadHeaderField;
   if (detector > static_cast<std::uint8_t>(table_format::DetectorKind::kCanny)) {
     return Status::kBadHeaderField;
@@ -240,8 +244,9 @@ Status TableView::open(std::span<const std::byte> bytes, TableView& out) noexcep
     image_bytes = static_cast<std::uint32_t>(bytes64);
   }
 
-  // The layout is canonical (table_format::layout_of), so any other offset is an error.
-  const std::uint32_t pixels = std::uint32_t{roi_width} * roi_height;
+  // The layout is canonical (table_format::layout_of), so any other offset is
+  // an error. The offsets index slots: pixels times orientation channels.
+  const std::uint32_t pixels = std::uint32_t{roi_width} * roi_height * channels;
   const table_format::Layout layout = table_format::layout_of(
       {cell_count, pixels, reference_count, reference_bytes, depth_count, model_point_count, image_bytes, delta_bytes, delta_count});
   if (load_le<std::uint32_t>(b + off::kCellsOffset) != layout.cells ||
@@ -333,6 +338,8 @@ Status TableView::open(std::span<const std::byte> bytes, TableView& out) noexcep
   view.max_stencil_size_ = stencil_max;
   view.model_point_count_ = model_point_count;
   view.roi_width_ = roi_width;
+  view.channels_ = channels;
+  view.channel_bits_ = channels_flag ? 9u - table_format::orientation_channel_shift(channels) : 0u;  // log2 channels + 1
   view.roi_height_ = roi_height;
   view.roi_origin_x_ = load_le<std::int16_t>(b + off::kRoiOriginX);
   view.roi_origin_y_ = load_le<std::int16_t>(b + off::kRoiOriginY);

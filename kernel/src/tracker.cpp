@@ -39,8 +39,26 @@ bool first_visit(std::span<std::uint8_t> mask, std::uint32_t bit) noexcept {
   return true;
 }
 
-std::uint32_t rotate_into_roi(const TableView& table, std::span<RoiPoint> features, std::uint32_t count,
-                              const ImageWindow& window, std::int32_t cx, std::int32_t cy, SinCos sc,
+// Orientation channels (table_view.hpp, feature_slots): the channel of the
+// edge at image pixel (x, y) in the table frame (its orientation less the
+// ROI's angle, `turn` in 256ths of a half turn), packed into at.col.
+void add_channel(const TableView& table, const ImageView& image, std::int64_t x, std::int64_t y, std::uint32_t turn,
+                 RoiPoint& at) noexcept {
+  const std::uint32_t bits = table.channel_bits(), k = bits - 1;
+  const SobelGradient g = sobel_gradient(image, static_cast<std::uint32_t>(x), static_cast<std::uint32_t>(y));
+  const std::uint32_t o = (orientation_256(g.gx, g.gy) + 256u - turn) & 255u;
+  const std::uint32_t channel = o >> (8 - k), upper = (o >> (7 - k)) & 1u;
+  at.col = static_cast<std::uint16_t>((std::uint32_t{at.col} << bits) | (channel << 1) | upper);
+}
+
+// The ROI's angle in 256ths of a half turn, modulo 256.
+std::uint32_t half_turn_steps(float theta_deg) noexcept {
+  const float wrapped = theta_deg - 180.0f * static_cast<float>(round_to_int(theta_deg / 180.0f));  // [-90, 90]
+  return static_cast<std::uint32_t>(round_to_int(wrapped * (256.0f / 180.0f)) + 256) & 255u;
+}
+
+std::uint32_t rotate_into_roi(const TableView& table, const ImageView& image, std::span<RoiPoint> features, std::uint32_t count,
+                              const ImageWindow& window, std::int32_t cx, std::int32_t cy, SinCos sc, std::uint32_t turn,
                               std::span<std::uint8_t> mask) noexcept {
   for (std::size_t i = 0; i < tracker_mask_bytes(table); ++i) mask[i] = 0;
   std::uint32_t kept = 0;
@@ -51,7 +69,9 @@ std::uint32_t rotate_into_roi(const TableView& table, std::span<RoiPoint> featur
                       static_cast<float>(window.y0 + features[i].row - cy), sc, bit, at)) {
       continue;
     }
-    if (first_visit(mask, bit)) features[kept++] = at;
+    if (!first_visit(mask, bit)) continue;
+    if (table.channel_bits() != 0) add_channel(table, image, window.x0 + features[i].col, window.y0 + features[i].row, turn, at);
+    features[kept++] = at;
   }
   return kept;
 }
@@ -101,14 +121,20 @@ Status prepare_frame(const TableView& table, const Detector& detector, const Ima
   FeatureCount found;
   GABARIT_TRY(extract_features(image, window, detector.kind, detector.threshold, scratch.features, found));
   std::uint32_t n = found.written;
-  if (rotated) n = rotate_into_roi(table, scratch.features, n, window, cx, cy, sin_cos_deg(previous.theta_deg), scratch.roi_mask);
+  if (rotated) {
+    n = rotate_into_roi(table, image, scratch.features, n, window, cx, cy, sin_cos_deg(previous.theta_deg),
+                        half_turn_steps(previous.theta_deg), scratch.roi_mask);
+  } else if (table.channel_bits() != 0) {
+    for (std::uint32_t i = 0; i < n; ++i)
+      add_channel(table, image, window.x0 + scratch.features[i].col, window.y0 + scratch.features[i].row, 0, scratch.features[i]);
+  }
   out = {cx, cy, n, found.dropped};
   return Status::kOk;
 }
 
-Status map_features(const TableView& table, std::span<const RoiPoint> detected, const ImageWindow& window,
+Status map_features(const TableView& table, const ImageView& image, std::span<const RoiPoint> detected, const ImageWindow& window,
                     const Pose& previous, TrackerScratch scratch, PreparedFrame& out) noexcept {
-  if (!pose_in_range(previous)) {
+  if (!pose_in_range(previous) || (table.channel_bits() != 0 && !image.valid())) {
     return Status::kInvalidArgument;
   }
   if (scratch.counters.size() != voter_counter_count(table.cell_count()) ||
@@ -135,6 +161,7 @@ Status map_features(const TableView& table, std::span<const RoiPoint> detected, 
   }
   for (std::size_t i = 0; i < tracker_mask_bytes(table); ++i) scratch.roi_mask[i] = 0;
   const SinCos sc = sin_cos_deg(previous.theta_deg);
+  const std::uint32_t turn = half_turn_steps(previous.theta_deg);
   std::uint32_t kept = 0, dropped = 0;
   for (std::size_t i = lo; i < detected.size() && detected[i].row <= last_row; ++i) {
     if (detected[i].col < first_col || detected[i].col > last_col) continue;
@@ -145,6 +172,7 @@ Status map_features(const TableView& table, std::span<const RoiPoint> detected, 
       continue;
     }
     if (!first_visit(scratch.roi_mask, bit)) continue;
+    if (table.channel_bits() != 0) add_channel(table, image, window.x0 + detected[i].col, window.y0 + detected[i].row, turn, at);
     if (kept < scratch.features.size()) scratch.features[kept++] = at;
     else ++dropped;
   }

@@ -11,10 +11,11 @@ Status check_counters(const TableView& table, std::span<const VoteCounter> count
 }
 
 Status check_features(const TableView& table, std::span<const RoiPoint> features) noexcept {
-  const std::uint16_t w = table.roi_width();
-  const std::uint16_t h = table.roi_height();
+  const std::uint32_t w = table.roi_width();
+  const std::uint32_t h = table.roi_height();
+  const std::uint32_t bits = table.channel_bits();
   for (const RoiPoint& f : features) {
-    if (f.col >= w || f.row >= h) return Status::kFeatureOutOfRoi;
+    if ((std::uint32_t{f.col} >> bits) >= w || f.row >= h) return Status::kFeatureOutOfRoi;
   }
   return Status::kOk;
 }
@@ -52,13 +53,23 @@ void vote_scalar(const TableView& table, const Offsets& offsets, std::span<const
     const std::uint32_t in_range = i < references ? i : references - 1;
     return static_cast<std::uint32_t>(load_le<Ref>(refs + std::size_t{in_range} * sizeof(Ref)));
   };
-  for (const RoiPoint& f : features) {
-    const ReferenceRange r = offsets.range(std::size_t{f.row} * w + f.col);
+  const auto vote_slot = [&](std::uint32_t slot) {
+    const ReferenceRange r = offsets.range(slot);
     const std::uint32_t begin = r.begin, end = r.end;
     bump_by(counters, ref_at(begin), begin < end);
     bump_by(counters, ref_at(begin + 1), begin + 1 < end);
     for (std::uint32_t i = begin + 2; i < end; ++i) bump(counters, load_le<Ref>(refs + std::size_t{i} * sizeof(Ref)));
     votes += end - begin;
+  };
+  const std::uint32_t bits = table.channel_bits();
+  if (bits == 0) {
+    for (const RoiPoint& f : features) vote_slot(std::uint32_t{f.row} * w + f.col);
+    return;
+  }
+  for (const RoiPoint& f : features) {  // orientation channels: two slots per feature
+    const FeatureSlots s = feature_slots(f.col, f.row, w, bits);
+    vote_slot(s.first);
+    vote_slot(s.second);
   }
 }
 
@@ -68,9 +79,9 @@ void vote_cell_range(const TableView& table, const Offsets& offsets, std::span<c
   const std::byte* refs = table.references_data();
   const std::uint32_t w = table.roi_width();
   const auto ref_at = [refs](std::uint32_t i) { return static_cast<std::uint32_t>(load_le<Ref>(refs + std::size_t{i} * sizeof(Ref))); };
-  for (const RoiPoint& f : features) {
-    const std::size_t pixel = std::size_t{f.row} * w + f.col;
-    const ReferenceRange r = offsets.range(pixel);
+  const std::uint32_t bits = table.channel_bits();
+  const auto vote_slot = [&](std::uint32_t slot) {
+    const ReferenceRange r = offsets.range(slot);
     std::uint32_t lo = r.begin;
     const std::uint32_t end = r.end;
     // First reference >= cell_begin (lists are strictly increasing).
@@ -87,6 +98,11 @@ void vote_cell_range(const TableView& table, const Offsets& offsets, std::span<c
       bump(counters, cell);
     }
     votes += i - lo;
+  };
+  for (const RoiPoint& f : features) {
+    const FeatureSlots s = feature_slots(f.col, f.row, w, bits);
+    vote_slot(s.first);
+    if (s.two) vote_slot(s.second);
   }
 }
 
@@ -132,7 +148,7 @@ Status expand_offsets(const TableView& table, std::span<std::uint32_t> expanded)
   if (table.cell_count() == 0) return Status::kInvalidArgument;
   if (expanded.size() != expanded_offsets_count(table)) return Status::kBufferTooSmall;
   table.with_offsets([&](const auto& offsets) {
-    for (std::uint32_t p = 0; p <= table.roi_pixels(); ++p) expanded[p] = offsets.begin(p);
+    for (std::uint32_t p = 0; p <= table.roi_slots(); ++p) expanded[p] = offsets.begin(p);
   });
   return Status::kOk;
 }

@@ -17,7 +17,7 @@ namespace {
 
 struct Dense {
   explicit Dense(const TableView& t)
-      : masks(dense_mask_words(t.roi_pixels(), t.cell_count())), scratch(dense_scratch_words(t.cell_count())) {
+      : masks(dense_mask_words(t.roi_slots(), t.cell_count())), scratch(dense_scratch_words(t.cell_count())) {
     EXPECT_EQ(build_dense_masks(t, masks), Status::kOk);
   }
   std::vector<std::uint64_t> masks, scratch;

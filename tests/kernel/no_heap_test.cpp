@@ -97,7 +97,7 @@ int main() {
   std::vector<VoteCounter> counters(voter_counter_count(table.cell_count()));
   std::vector<std::uint8_t> mask(tracker_mask_bytes(table));
   std::vector<CellScore> top(5);
-  std::vector<std::uint64_t> masks(dense_mask_words(table.roi_pixels(), table.cell_count()));
+  std::vector<std::uint64_t> masks(dense_mask_words(table.roi_slots(), table.cell_count()));
   std::vector<std::uint64_t> dense_scratch(dense_scratch_words(table.cell_count()));
   if (build_dense_masks(table, masks) != Status::kOk) return 2;
   std::vector<std::uint32_t> expanded(expanded_offsets_count(table));
@@ -174,7 +174,7 @@ int main() {
     const ImageWindow window{0, 0, 64, 64};
     FeatureCount c;
     return extract_features(view, window, detector_of(table).kind, detector_of(table).threshold, search_features, c) == Status::kOk &&
-           map_features(table, std::span<const RoiPoint>(search_features).first(c.written), window, Pose{32, 32, 4.0f, 0}, scratch,
+           map_features(table, view, std::span<const RoiPoint>(search_features).first(c.written), window, Pose{32, 32, 4.0f, 0}, scratch,
                         prepared) == Status::kOk;
   });
   // Depth by intensity, inside a session and on its own.

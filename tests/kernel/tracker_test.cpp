@@ -145,7 +145,7 @@ TEST(MapFeatures, MatchesPrepareFrameForAWindowIndependentDetector) {
     SCOPED_TRACE(pose.theta_deg);
     PreparedFrame expected, got;
     ASSERT_EQ(prepare_frame(t, binary, image.view(), pose, a.view(), expected), Status::kOk);
-    ASSERT_EQ(map_features(t, detected, big, pose, b.view(), got), Status::kOk);
+    ASSERT_EQ(map_features(t, image.view(), detected, big, pose, b.view(), got), Status::kOk);
     EXPECT_EQ(got.roi_centre_x, expected.roi_centre_x);
     EXPECT_EQ(got.roi_centre_y, expected.roi_centre_y);
     ASSERT_EQ(got.features, expected.features);
@@ -165,13 +165,13 @@ TEST(MapFeatures, RefusesBadArgumentsAndCountsWhatDoesNotFit) {
   const ImageWindow window{0, 0, 40, 40};
   Scratch s(t);
   PreparedFrame out;
-  EXPECT_EQ(map_features(t, detected, window, Pose{std::nanf(""), 10, 0, 0}, s.view(), out), Status::kInvalidArgument);
+  EXPECT_EQ(map_features(t, ImageView{}, detected, window, Pose{std::nanf(""), 10, 0, 0}, s.view(), out), Status::kInvalidArgument);
   TrackerScratch no_mask = s.view();
   no_mask.roi_mask = {};
-  EXPECT_EQ(map_features(t, detected, window, Pose{11, 10, 0, 0}, no_mask, out), Status::kBufferTooSmall);
+  EXPECT_EQ(map_features(t, ImageView{}, detected, window, Pose{11, 10, 0, 0}, no_mask, out), Status::kBufferTooSmall);
   TrackerScratch two = s.view();
   two.features = two.features.first(2);
-  ASSERT_EQ(map_features(t, detected, window, Pose{11, 10, 0, 0}, two, out), Status::kOk);
+  ASSERT_EQ(map_features(t, ImageView{}, detected, window, Pose{11, 10, 0, 0}, two, out), Status::kOk);
   EXPECT_EQ(out.features, 2u);
   EXPECT_EQ(out.features_dropped, 1u);  // (30, 12) lies outside the ROI: not counted
 }

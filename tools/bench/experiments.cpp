@@ -107,7 +107,7 @@ class ExhaustiveStencil final : public Estimator {
     for (std::uint32_t c = 0; c < table_.cell_count(); ++c) begin_[c + 1] += begin_[c];
     offsets_.resize(table_.reference_count());
     std::vector<std::uint32_t> fill(begin_.begin(), begin_.end() - 1);
-    for (std::uint32_t p = 0; p < table_.roi_pixels(); ++p) {
+    for (std::uint32_t p = 0; p < table_.roi_slots(); ++p) {
       const std::ptrdiff_t dx = table_.roi_origin_x() + static_cast<std::int32_t>(p % table_.roi_width());
       const std::ptrdiff_t dy = table_.roi_origin_y() + static_cast<std::int32_t>(p / table_.roi_width());
       for (std::uint32_t i = table_.references_begin(p); i < table_.references_begin(p + 1); ++i) {

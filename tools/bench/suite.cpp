@@ -162,7 +162,7 @@ Measure measure(const std::vector<host::PoseSample>& poses, const std::vector<ho
 }
 
 SceneResult run_scene(std::uint32_t index, std::uint32_t frames_per_scene, const std::filesystem::path& dir, bool peer, bool particles,
-                      bool detection) {
+                      bool detection, std::uint32_t orientation_channels) {
   const host::SceneOptions so = host::suite_scene(index, frames_per_scene);
   char sub[16];
   std::snprintf(sub, sizeof sub, "%02u", index);
@@ -181,6 +181,7 @@ SceneResult run_scene(std::uint32_t index, std::uint32_t frames_per_scene, const
   bo.space.x = host::parse_axis("-5:5:11", "x");
   bo.space.y = host::parse_axis("-5:5:11", "y");
   bo.space.theta = host::parse_axis("-1.5:1.5:7", "theta");
+  bo.orientation_channels = orientation_channels;
   host::ImageModelOptions mo;
   mo.canny = true;  // gabarit tables build's default detector
   const std::vector<std::byte> bytes = host::build_table(host::model_from_images(paths, mo), bo);
@@ -408,7 +409,7 @@ int run_suite(const SuiteOptions& o) {
   csv << "index,name,half,method,within_1px,within_2px,within_1deg,depth_exact,reacquired_after,reacquired_in_reach,mean_us,p99_us\n";
   for (std::uint32_t i = 0; i < scenes; ++i) {
     std::fprintf(stderr, "\rsuite: scene %u/%u", i + 1, scenes);
-    results.push_back(run_scene(i, frames, dir, o.peer, o.particles, o.detection));
+    results.push_back(run_scene(i, frames, dir, o.peer, o.particles, o.detection, o.orientation_channels));
     const SceneResult& r = results.back();
     for (std::size_t m = 0; m < r.methods.size(); ++m) {
       const Measure& x = r.methods[m];
@@ -428,7 +429,8 @@ int run_suite(const SuiteOptions& o) {
   std::ostringstream md;
   md << "# gabarit bench --suite\n\n" << scenes << " scenes of " << frames
      << " frames (`gabarit synth --suite`, docs/scene-suite.md), each tracked from its first true pose with its own table "
-        "(Canny detector, model images stored, x and y -5..5 px in 1-px cells, theta -1.5..1.5 deg in 0.5-deg cells, every depth). "
+        "(Canny detector, model images stored, x and y -5..5 px in 1-px cells, theta -1.5..1.5 deg in 0.5-deg cells, every depth"
+     << (o.orientation_channels ? ", " + std::to_string(o.orientation_channels) + " orientation channels" : std::string()) << "). "
         "Accuracy over the visible frames; depth only on tilted stacks (distinguishable depths); 'reacquired' is the "
         "worst number of frames after an occlusion until the pose is within 2 px again ('in reach': over the occlusions "
         "after which the target reappears within the recovery grid's reach of where it was last seen; '-': none). One thread.\n\n";

@@ -16,7 +16,8 @@ struct SuiteOptions {
   std::uint32_t frames = 0;       // 0: 160 (quick: 60)
   bool peer = true;               // run the NCC bank too
   bool particles = true;          // run the particle filter too (gabarit track --tracker particle)
-  bool detection = true;          // detection rows: gabarit detect, OpenCV's pyramid, re-acquisition by detection
+  bool detection = true;
+  std::uint32_t orientation_channels = 0;  // the scenes' tables: 0 position only, else 2..16 channels (format 1.3)          // detection rows: gabarit detect, OpenCV's pyramid, re-acquisition by detection
 };
 
 // Writes DIR/suite.md and DIR/suite-scenes.csv; returns the exit code.

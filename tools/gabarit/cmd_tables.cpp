@@ -79,6 +79,10 @@ int tables_build(const std::vector<std::string>& argv) {
              {"--detector", "canny|gradient-rows", "edge detector for grey images (default canny: non-maximum suppression\n"
               "                          and a double threshold, threshold/2..threshold; gradient-rows: the thesis's fast one,\n"
               "                          which keeps one pixel per run along a row and so misses edges near horizontal)"},
+             {"--orientation-channels", "N", "split each ROI pixel into N channels of edge orientation, 2, 4, 8 or 16 (format\n"
+              "                          1.3): a feature votes only the cells whose stencil covers it with a model\n"
+              "                          point of its orientation (docs/table-format.md); needs --model images and a\n"
+              "                          gradient detector; 0 (default): position only"},
              {"--no-model-images", "", "leave the model images out of the table (format 1.0; the tracker then has no\n"
               "                          focus stack of its own: depth from the stencils, or gabarit track --focus-stack)"},
              {"--threshold", "N", "gradient detector threshold 1..2040 (default: a quarter of the model's strongest edge)"},
@@ -136,6 +140,10 @@ int tables_build(const std::vector<std::string>& argv) {
 
   host::BuildOptions bo;
   bo.store_model_images = !args.has("--no-model-images");
+  bo.orientation_channels = static_cast<std::uint32_t>(args.integer("--orientation-channels", 0, 0, 16));
+  if (bo.orientation_channels != 0 && !table_format::valid_orientation_channels(bo.orientation_channels))
+    throw app::UsageError("--orientation-channels: want 2, 4, 8 or 16 (or 0 for none)");
+  if (bo.orientation_channels != 0 && !has_images) throw app::UsageError("--orientation-channels needs --model images");
   if (!has_images && args.has("--no-model-images")) throw app::UsageError("--no-model-images applies to --model images");
   bo.space.x = axis_argument(args, "--x", "");
   bo.space.y = axis_argument(args, "--y", "");

@@ -11,7 +11,7 @@
 // saturation.
 //
 // Memory (caller-owned):
-//   masks:   dense_mask_words(roi_pixels, cells) words, filled by build_dense_masks
+//   masks:   dense_mask_words(roi_slots, cells) words, filled by build_dense_masks
 //   scratch: dense_scratch_words(cells) words
 #pragma once
 
@@ -55,7 +55,7 @@ constexpr bool dense_voter_pays_off(std::uint32_t cells, std::uint32_t roi_pixel
   return 5 * words * roi_pixels < 10ull * roi_pixels + 3ull * references;
 }
 inline bool dense_voter_pays_off(const TableView& table) noexcept {
-  return dense_voter_pays_off(table.cell_count(), table.roi_pixels(), table.reference_count());
+  return dense_voter_pays_off(table.cell_count(), table.roi_slots(), table.reference_count());
 }
 static_assert(dense_voter_pays_off(121, 3600, 24000) && dense_voter_pays_off(121, 3600, 100),
               "two mask words: dense whatever the references");

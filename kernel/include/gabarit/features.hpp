@@ -66,6 +66,12 @@ SobelGradient sobel_gradient(const ImageView& image, std::uint32_t x, std::uint3
 // gets the same value. (0, 0) gives 0.
 inline constexpr std::uint32_t kOrientationSteps = 256;  // per half turn
 std::uint8_t orientation_256(std::int32_t gx, std::int32_t gy) noexcept;
+// The orientation of the edge at (x, y) of a model image: of its Sobel
+// gradient, or, where that vanishes (a point between two edge pixels), of
+// the strongest of its 8 neighbours'. The table builder (orientation
+// channels) and the model finder read model images with it. Outside the
+// image: 0. Precondition: image.valid().
+std::uint8_t edge_orientation_at(const ImageView& image, std::int32_t x, std::int32_t y) noexcept;
 // Orientation channels: the 256 steps in kOrientationChannels bins of 11.25 degrees.
 inline constexpr std::uint32_t kOrientationChannels = 16;
 constexpr std::uint8_t orientation_channel(std::uint8_t orientation) noexcept {

@@ -11,13 +11,27 @@ namespace gabarit::table_format {
 inline constexpr char kMagic[8] = {'G', 'B', 'R', 'T', 'L', 'U', 'T', '\0'};
 inline constexpr std::uint16_t kVersionMajor = 1;
 // 1.1 added the optional model-images section (kFlagModelImages); 1.2 the
-// compact pixel offsets (kFlagCompactOffsets). A table is written with the
-// lowest minor version that holds what it uses: without either, as 1.0,
-// byte for byte as before.
-inline constexpr std::uint16_t kVersionMinor = 2;
+// compact pixel offsets (kFlagCompactOffsets); 1.3 the orientation channels
+// (kFlagOrientationChannels). A table is written with the lowest minor
+// version that holds what it uses: without any, as 1.0, byte for byte as before.
+inline constexpr std::uint16_t kVersionMinor = 3;
 inline constexpr std::uint32_t kFlagModelImages = 1u;
 inline constexpr std::uint32_t kFlagCompactOffsets = 2u;
-inline constexpr std::uint32_t kKnownFlags = kFlagModelImages | kFlagCompactOffsets;  // others must be 0
+inline constexpr std::uint32_t kFlagOrientationChannels = 4u;
+inline constexpr std::uint32_t kKnownFlags = kFlagModelImages | kFlagCompactOffsets | kFlagOrientationChannels;  // others must be 0
+
+// Orientation channels (1.3): each ROI pixel is split into C slots, one per
+// channel of edge orientation (modulo 180 degrees, in the table frame);
+// slot = pixel * C + channel, and the pixel offsets index slots. A feature
+// whose gradient orientation (features.hpp, orientation_256, less the ROI's
+// angle) lies in channel c votes only the references of slot (p, c): the
+// cells whose stencils cover p with a model point of that orientation.
+// C is 2, 4, 8 or 16; channel = orientation_256 >> (8 - log2 C).
+inline constexpr std::uint8_t kMaxOrientationChannels = 16;
+constexpr bool valid_orientation_channels(std::uint32_t c) noexcept { return c == 2 || c == 4 || c == 8 || c == 16; }
+constexpr std::uint32_t orientation_channel_shift(std::uint32_t c) noexcept {
+  return c == 2 ? 7u : c == 4 ? 6u : c == 8 ? 5u : 4u;
+}
 
 // Compact pixel offsets (1.2): the ROI's pixels in blocks of 128. Per block
 // a 24-byte header { u32 base: the block's first reference; u32 rank: the
@@ -133,7 +147,8 @@ inline constexpr std::size_t kModelPointsOffset = 136; // u32: model_point_count
 inline constexpr std::size_t kModelImagesOffset = 140; // u32 (v1.1): depth_count x model_width x model_height u8, 0 if absent
 inline constexpr std::size_t kOffsetDeltaBytes = 144;  // u8 (v1.2, compact offsets): 1 or 2; else 0
 inline constexpr std::size_t kOffsetBlockLog2 = 145;   // u8 (v1.2, compact offsets): 7; else 0
-inline constexpr std::size_t kReserved146 = 146;       // u16, must be 0
+inline constexpr std::size_t kOrientationChannels = 146;  // u8 (v1.3, kFlagOrientationChannels): 2, 4, 8 or 16; else 0
+inline constexpr std::size_t kReserved147 = 147;       // u8, must be 0
 inline constexpr std::size_t kOffsetDeltaCount = 148;  // u32 (v1.2, compact offsets): non-empty pixels; else 0
 inline constexpr std::size_t kReserved152 = 152;       // 8 bytes, must be 0
 }  // namespace offset
@@ -164,7 +179,7 @@ constexpr std::uint32_t align_up(std::uint32_t n) noexcept {
 // The counts that fix a table's layout.
 struct LayoutCounts {
   std::uint32_t cell_count = 0;
-  std::uint32_t roi_pixels = 0;        // roi_width * roi_height
+  std::uint32_t roi_pixels = 0;        // roi_width * roi_height, times the orientation channels (the slots)
   std::uint32_t reference_count = 0;
   std::uint8_t reference_bytes = 0;    // narrowest_reference_bytes(cell_count)
   std::uint16_t depth_count = 0;

@@ -11,6 +11,7 @@
 
 #include "gabarit/byte_order.hpp"
 #include "gabarit/image_view.hpp"
+#include "gabarit/roi_point.hpp"
 #include "gabarit/status.hpp"
 #include "gabarit/table_format.hpp"
 
@@ -96,6 +97,24 @@ struct CompactOffsets {
   }
 };
 
+// The slots a feature votes (TableView::channel_bits): its pixel's, or, with
+// orientation channels, its channel's and the nearer neighbouring channel's.
+struct FeatureSlots {
+  std::uint32_t first = 0;
+  std::uint32_t second = 0;
+  bool two = false;
+};
+// Precondition: the feature's pixel is inside the ROI (row < roi height,
+// column < roi width); channel_bits and width as the table's.
+constexpr FeatureSlots feature_slots(std::uint32_t col, std::uint32_t row, std::uint32_t width, std::uint32_t channel_bits) noexcept {
+  if (channel_bits == 0) return {row * width + col, 0, false};
+  const std::uint32_t k = channel_bits - 1, channels = 1u << k;
+  const std::uint32_t base = (row * width + (col >> channel_bits)) << k;
+  const std::uint32_t c = (col >> 1) & (channels - 1);
+  const std::uint32_t other = (c + ((col & 1u) ? 1u : channels - 1u)) & (channels - 1u);
+  return {base + c, base + other, true};
+}
+
 // CRC-32 of a table: every byte except the 4-byte CRC field itself (so a
 // flipped bit anywhere, header included, is caught). Precondition:
 // table.size() >= table_format::kHeaderBytes.
@@ -114,6 +133,16 @@ class TableView {
   std::uint16_t roi_width() const noexcept { return roi_width_; }
   std::uint16_t roi_height() const noexcept { return roi_height_; }
   std::uint32_t roi_pixels() const noexcept { return std::uint32_t{roi_width_} * roi_height_; }
+  // Orientation channels (format 1.3): 1 for a position-only table, else 2,
+  // 4, 8 or 16 slots per ROI pixel; the pixel offsets index slots.
+  std::uint32_t orientation_channels() const noexcept { return channels_; }
+  std::uint32_t roi_slots() const noexcept { return roi_pixels() * channels_; }
+  // With channels, a feature's RoiPoint carries its channel: col holds
+  // (column << (k + 1)) | (channel << 1) | upper, k = log2 channels, upper
+  // set when its orientation lies in the upper half of its channel. It votes
+  // its channel's slot and the nearer neighbour's (feature_slots).
+  std::uint32_t channel_bits() const noexcept { return channel_bits_; }  // k + 1, or 0 without channels
+  std::uint32_t feature_column(const RoiPoint& f) const noexcept { return std::uint32_t{f.col} >> channel_bits_; }
   // Position of ROI column 0 / row 0 relative to the ROI centre (the previous pose).
   std::int16_t roi_origin_x() const noexcept { return roi_origin_x_; }
   std::int16_t roi_origin_y() const noexcept { return roi_origin_y_; }
@@ -214,6 +243,8 @@ class TableView {
   std::uint32_t model_point_count_ = 0;
   std::uint16_t roi_width_ = 0;
   std::uint16_t roi_height_ = 0;
+  std::uint32_t channels_ = 1;
+  std::uint32_t channel_bits_ = 0;
   std::int16_t roi_origin_x_ = 0;
   std::int16_t roi_origin_y_ = 0;
   std::uint16_t detector_threshold_ = 0;

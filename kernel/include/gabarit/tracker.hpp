@@ -128,7 +128,9 @@ Status finish_frame(const TableView& table, const Pose& previous, const Prepared
 // prepare_frame cuts). scratch.roi_mask is needed whatever the angle. Errors: kInvalidArgument for a non-finite pose,
 // kBufferTooSmall for short counters or mask; features beyond
 // scratch.features are counted as dropped.
-Status map_features(const TableView& table, std::span<const RoiPoint> detected, const ImageWindow& window,
+// `image` is the frame the features were detected in (with orientation
+// channels their gradients give the channels; unused otherwise).
+Status map_features(const TableView& table, const ImageView& image, std::span<const RoiPoint> detected, const ImageWindow& window,
                     const Pose& previous, TrackerScratch scratch, PreparedFrame& out) noexcept;
 
 // The pose update for cell `cell` measured from `previous` with the ROI centred

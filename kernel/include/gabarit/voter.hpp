@@ -97,7 +97,7 @@ Status accumulate_votes(const TableView& table, std::span<const RoiPoint> featur
 // expanded_offsets_count(table) entries (kBufferTooSmall otherwise), and
 // accumulate_votes_expanded votes exactly as accumulate_votes. Precondition
 // of the latter: `expanded` is expand_offsets' output for this table.
-inline std::size_t expanded_offsets_count(const TableView& table) noexcept { return std::size_t{table.roi_pixels()} + 1; }
+inline std::size_t expanded_offsets_count(const TableView& table) noexcept { return std::size_t{table.roi_slots()} + 1; }
 Status expand_offsets(const TableView& table, std::span<std::uint32_t> expanded) noexcept;
 Status accumulate_votes_expanded(const TableView& table, std::span<const std::uint32_t> expanded, std::span<const RoiPoint> features,
                                  std::span<VoteCounter> counters, VoteTally& tally) noexcept;

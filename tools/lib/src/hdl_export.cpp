@@ -24,18 +24,31 @@ std::uint32_t HdlLayout::max_range_count() const {
   return m;
 }
 
+std::vector<RoiPoint> hdl_features(const TableView& t, std::span<const RoiPoint> features) {
+  if (t.channel_bits() == 0) return {features.begin(), features.end()};
+  const std::uint32_t slot_width = t.roi_width() * t.orientation_channels();
+  std::vector<RoiPoint> out;
+  out.reserve(2 * features.size());
+  for (const RoiPoint& f : features) {
+    const FeatureSlots s = feature_slots(f.col, f.row, t.roi_width(), t.channel_bits());
+    for (const std::uint32_t slot : {s.first, s.second})
+      out.push_back({static_cast<std::uint16_t>(slot % slot_width), static_cast<std::uint16_t>(slot / slot_width)});
+  }
+  return out;
+}
+
 HdlLayout hdl_layout(const TableView& t, std::uint32_t lanes) {
   if (lanes != 1 && lanes != 2 && lanes != 4 && lanes != 8) throw app::Error("--lanes must be 1, 2, 4 or 8");
   HdlLayout l;
   l.lanes = lanes;
   l.cell_count = t.cell_count();
   l.cells_per_lane = (t.cell_count() + lanes - 1) / lanes;
-  l.roi_width = t.roi_width();
+  l.roi_width = t.roi_width() * t.orientation_channels();  // slots per row (docs/table-format.md, 1.3)
   l.roi_height = t.roi_height();
   l.refs.assign(lanes, {});
   l.sizes.assign(lanes, std::vector<std::uint32_t>(l.cells_per_lane, 1));
-  l.ranges.assign(t.roi_pixels(), std::vector<HdlRange>(lanes));
-  for (std::uint32_t p = 0; p < t.roi_pixels(); ++p) {
+  l.ranges.assign(t.roi_slots(), std::vector<HdlRange>(lanes));
+  for (std::uint32_t p = 0; p < t.roi_slots(); ++p) {
     for (std::uint32_t k = 0; k < lanes; ++k) l.ranges[p][k].begin = static_cast<std::uint32_t>(l.refs[k].size());
     // Cells of a pixel increase, so each lane's sub-list increases too.
     for (std::uint32_t i = t.references_begin(p); i < t.references_begin(p + 1); ++i) {
@@ -129,7 +142,7 @@ std::string write_hdl_export(const HdlLayout& l, const std::string& dir, HdlCapa
       << "  localparam int unsigned Lanes = " << l.lanes << ";\n"
       << "  localparam int unsigned CellCapacity = " << cap.cells << ";\n"
       << "  localparam int unsigned CellCount = " << l.cell_count << ";  // the table's cells\n"
-      << "  localparam int unsigned RoiWidth = " << l.roi_width << ";\n"
+      << "  localparam int unsigned RoiWidth = " << l.roi_width << ";  // slots per row: ROI width x orientation channels\n"
       << "  localparam int unsigned RoiHeight = " << l.roi_height << ";\n"
       << "  localparam int unsigned PixelCapacity = " << cap.pixels << ";\n"
       << "  localparam int unsigned RefsPerLane = " << refs_per_lane << ";\n"

@@ -17,7 +17,7 @@ constexpr std::uint32_t kUnreachable = std::numeric_limits<std::uint32_t>::max()
 // Per cell, the ROI pixels whose lists hold it (the stencil, decimated).
 std::vector<std::vector<std::uint32_t>> stencil_pixels(const TableView& t) {
   std::vector<std::vector<std::uint32_t>> s(t.cell_count());
-  for (std::uint32_t p = 0; p < t.roi_pixels(); ++p)
+  for (std::uint32_t p = 0; p < t.roi_slots(); ++p)
     for (std::uint32_t i = t.references_begin(p); i < t.references_begin(p + 1); ++i) s[t.reference(i)].push_back(p);
   return s;
 }
@@ -94,7 +94,7 @@ bool translation_cells(const TableView& t) {
 
 std::vector<std::uint64_t> refs_per_pixel(const TableView& t) {
   std::vector<std::uint64_t> h;
-  for (std::uint32_t p = 0; p < t.roi_pixels(); ++p) {
+  for (std::uint32_t p = 0; p < t.roi_slots(); ++p) {
     const std::uint32_t k = t.references_begin(p + 1) - t.references_begin(p);
     if (h.size() <= k) h.resize(k + 1, 0);
     ++h[k];
@@ -292,12 +292,12 @@ std::string overlap_map_svg(const TableView& t, std::uint32_t cell) {
   const int scale = std::max(1, std::min(8, 640 / std::max<int>(t.roi_width(), t.roi_height())));
   const int w = t.roi_width() * scale + 20, h = t.roi_height() * scale + 50;
   std::uint32_t widest = 1;
-  for (std::uint32_t p = 0; p < t.roi_pixels(); ++p) widest = std::max(widest, t.references_begin(p + 1) - t.references_begin(p));
+  for (std::uint32_t p = 0; p < t.roi_slots(); ++p) widest = std::max(widest, t.references_begin(p + 1) - t.references_begin(p));
   std::ostringstream o;
   o << "<svg xmlns='http://www.w3.org/2000/svg' width='" << w << "' height='" << h << "' font-family='sans-serif' font-size='12'>\n"
     << "<rect width='100%' height='100%' fill='white'/>\n<text x='10' y='18'>stencil of cell " << cell
     << ": its pixels by overlap (white 1 stencil, dark " << widest << "); grey: other stencils' pixels</text>\n";
-  for (std::uint32_t p = 0; p < t.roi_pixels(); ++p) {
+  for (std::uint32_t p = 0; p < t.roi_slots(); ++p) {
     const std::uint32_t k = t.references_begin(p + 1) - t.references_begin(p);
     if (k == 0) continue;
     const int x = 10 + static_cast<int>(p % t.roi_width()) * scale, y = 30 + static_cast<int>(p / t.roi_width()) * scale;

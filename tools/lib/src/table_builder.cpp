@@ -6,6 +6,8 @@
 #include <limits>
 
 #include "gabarit/byte_order.hpp"
+#include "gabarit/deterministic_math.hpp"
+#include "gabarit/features.hpp"
 #include "gabarit/host/decimation.hpp"
 #include "gabarit/app/error.hpp"
 #include "gabarit/host/stencil.hpp"
@@ -97,8 +99,29 @@ Stencils compute_stencils(const ModelStack& model, const BuildOptions& options) 
   }
   if (!(static_cast<float>(options.keep) > 0.0f)) throw app::Error("--keep is too small to store (below 1e-38)");
 
+  const std::uint32_t channels = options.orientation_channels;
+  if (channels != 0 && !tf::valid_orientation_channels(channels)) throw app::Error("orientation channels: want 2, 4, 8 or 16");
+  if (channels != 0 && model.images.size() != model.depths.size())
+    throw app::Error("orientation channels need a model built from images (each point's orientation is the image's edge there)");
+  if (channels != 0 && model.detector.kind == tf::DetectorKind::kBinary)
+    throw app::Error("orientation channels need a gradient detector (--canny or --gradient), not --binary");
+  // Each model point's edge orientation (orientation_256), per depth.
+  std::vector<std::vector<std::uint8_t>> orientation(model.depths.size());
+  if (channels != 0) {
+    for (std::size_t d = 0; d < model.depths.size(); ++d) {
+      const ImageView img{model.images[d].data(), model.image_width, model.image_height, model.image_width};
+      for (const Point& p : model.depths[d])
+        orientation[d].push_back(edge_orientation_at(img, round_to_int(model.ref_x + static_cast<float>(p.x)),
+                                                     round_to_int(model.ref_y + static_cast<float>(p.y))));
+    }
+  }
   out.cells = out.space.cells();
   out.points.resize(out.cells.size());
+  out.channel_count = channels == 0 ? 1u : channels;
+  if (channels != 0) out.channels.resize(out.cells.size());
+  // With channels: per channel, the arcs of the points whose orientation,
+  // turned by any angle of the cell's theta range, lies in that channel.
+  std::vector<std::vector<Point>> channel_arcs;
   std::int64_t min_x = std::numeric_limits<std::int64_t>::max(), min_y = min_x;
   std::int64_t max_x = std::numeric_limits<std::int64_t>::min(), max_y = max_x;
   // The rotation sweep depends only on (depth, theta cell), shared by the
@@ -106,11 +129,42 @@ Stencils compute_stencils(const ModelStack& model, const BuildOptions& options) 
   std::vector<Point> arcs;
   for (std::size_t c = 0; c < out.cells.size(); ++c) {
     const CellBounds& u = out.cells[c];
-    if (c == 0 || u.depth != out.cells[c - 1].depth || u.theta_lo_deg != out.cells[c - 1].theta_lo_deg ||
-        u.theta_hi_deg != out.cells[c - 1].theta_hi_deg) {
-      arcs = swept_arcs(model.depths[u.depth], u.theta_lo_deg, u.theta_hi_deg);
+    const bool new_sweep = c == 0 || u.depth != out.cells[c - 1].depth || u.theta_lo_deg != out.cells[c - 1].theta_lo_deg ||
+                           u.theta_hi_deg != out.cells[c - 1].theta_hi_deg;
+    if (channels == 0) {
+      if (new_sweep) arcs = swept_arcs(model.depths[u.depth], u.theta_lo_deg, u.theta_hi_deg);
+      out.points[c] = translate_sweep(arcs, u, options.translations);
+    } else {
+      if (new_sweep) {
+        std::vector<std::vector<Point>> members(channels);
+        const double width = 256.0 / channels;  // orientation steps per channel
+        for (std::size_t i = 0; i < model.depths[u.depth].size(); ++i) {
+          const double lo = orientation[u.depth][i] + u.theta_lo_deg * (256.0 / 180.0);
+          const double hi = orientation[u.depth][i] + u.theta_hi_deg * (256.0 / 180.0);
+          const auto first = static_cast<std::int64_t>(std::floor(lo / width)), last = static_cast<std::int64_t>(std::floor(hi / width));
+          for (std::int64_t k = first; k <= last && k < first + channels; ++k)
+            members[static_cast<std::size_t>(((k % channels) + channels) % channels)].push_back(model.depths[u.depth][i]);
+        }
+        channel_arcs.assign(channels, {});
+        for (std::uint32_t k = 0; k < channels; ++k)
+          if (!members[k].empty()) channel_arcs[k] = swept_arcs(members[k], u.theta_lo_deg, u.theta_hi_deg);
+      }
+      // Points in (x, y, channel) order.
+      std::vector<std::pair<Point, std::uint8_t>> all;
+      for (std::uint32_t k = 0; k < channels; ++k) {
+        if (channel_arcs[k].empty()) continue;
+        for (const Point& p : translate_sweep(channel_arcs[k], u, options.translations)) all.push_back({p, static_cast<std::uint8_t>(k)});
+      }
+      std::sort(all.begin(), all.end(), [](const auto& a, const auto& b) {
+        return a.first.x != b.first.x ? a.first.x < b.first.x : a.first.y != b.first.y ? a.first.y < b.first.y : a.second < b.second;
+      });
+      out.points[c].clear();
+      out.channels[c].clear();
+      for (const auto& [p, k] : all) {
+        out.points[c].push_back(p);
+        out.channels[c].push_back(k);
+      }
     }
-    out.points[c] = translate_sweep(arcs, u, options.translations);
     for (const Point& p : out.points[c]) {
       min_x = std::min<std::int64_t>(min_x, p.x);
       max_x = std::max<std::int64_t>(max_x, p.x);
@@ -122,7 +176,8 @@ Stencils compute_stencils(const ModelStack& model, const BuildOptions& options) 
     if (options.progress && (c % 64 == 0 || c + 1 == out.cells.size())) options.progress(c + 1, out.cells.size());
   }
   const std::int64_t roi_w = max_x - min_x + 1, roi_h = max_y - min_y + 1;
-  if (roi_w > 0xFFFF || roi_h > 0xFFFF || roi_w * roi_h > tf::kMaxRoiPixels || min_x < INT16_MIN || min_y < INT16_MIN) {
+  if (roi_w > 0xFFFF || roi_h > 0xFFFF || roi_w * roi_h * out.channel_count > tf::kMaxRoiPixels || min_x < INT16_MIN ||
+      min_y < INT16_MIN) {
     throw app::Error("ROI " + std::to_string(roi_w) + "x" + std::to_string(roi_h) + " is too large for the table format");
   }
   const std::uint32_t window = tf::roi_window_side(static_cast<std::uint16_t>(roi_w), static_cast<std::uint16_t>(roi_h),
@@ -136,15 +191,17 @@ Stencils compute_stencils(const ModelStack& model, const BuildOptions& options) 
 }
 
 CsrLists assemble_csr(Stencils& stencils, const BuildOptions& options) {
-  const std::uint32_t pixels = std::uint32_t{stencils.roi_width} * stencils.roi_height;
-  // Decimation, in (cell, pixel) order.
+  const std::uint32_t pixels = stencils.slots();
+  // Decimation, in (cell, slot) order. With orientation channels a row of
+  // the ROI is roi_width x channels slots wide (decimation's neighbourhoods
+  // then run along the slots of a row).
   StencilPixels pixel_lists;
-  pixel_lists.roi_width = stencils.roi_width;
+  pixel_lists.roi_width = static_cast<std::uint32_t>(stencils.roi_width) * stencils.channel_count;
   pixel_lists.roi_height = stencils.roi_height;
   pixel_lists.cells.resize(stencils.points.size());
   for (std::size_t c = 0; c < stencils.points.size(); ++c) {
     pixel_lists.cells[c].reserve(stencils.points[c].size());
-    for (const Point& p : stencils.points[c]) pixel_lists.cells[c].push_back(stencils.pixel_of(p));
+    for (std::size_t k = 0; k < stencils.points[c].size(); ++k) pixel_lists.cells[c].push_back(stencils.slot_of(c, k));
   }
   const std::vector<bool> kept = decimate(pixel_lists, options.keep, options.seed, options.decimation);
 
@@ -155,9 +212,9 @@ CsrLists assemble_csr(Stencils& stencils, const BuildOptions& options) {
   std::size_t i = 0;
   for (std::size_t c = 0; c < stencils.points.size(); ++c) {
     std::uint32_t size = 0;
-    for (const Point& p : stencils.points[c]) {
+    for (std::size_t k = 0; k < stencils.points[c].size(); ++k) {
       if (kept[i++]) {
-        ++csr.offsets[stencils.pixel_of(p) + 1];
+        ++csr.offsets[stencils.slot_of(c, k) + 1];
         ++size;
       }
     }
@@ -168,8 +225,8 @@ CsrLists assemble_csr(Stencils& stencils, const BuildOptions& options) {
   std::vector<std::uint32_t> fill(csr.offsets.begin(), csr.offsets.end() - 1);
   i = 0;
   for (std::size_t c = 0; c < stencils.points.size(); ++c)
-    for (const Point& p : stencils.points[c])
-      if (kept[i++]) csr.cells[fill[stencils.pixel_of(p)]++] = static_cast<std::uint32_t>(c);
+    for (std::size_t k = 0; k < stencils.points[c].size(); ++k)
+      if (kept[i++]) csr.cells[fill[stencils.slot_of(c, k)]++] = static_cast<std::uint32_t>(c);
   return csr;
 }
 
@@ -177,7 +234,8 @@ std::vector<std::byte> serialise_table(const ModelStack& model, const BuildOptio
                                        const CsrLists& csr) {
   const std::vector<CellBounds>& cells = stencils.cells;
   const auto cell_count = static_cast<std::uint32_t>(cells.size());
-  const std::uint32_t pixels = std::uint32_t{stencils.roi_width} * stencils.roi_height;
+  const std::uint32_t pixels = stencils.slots();
+  const bool channels = stencils.channel_count > 1;
   const auto references = static_cast<std::uint32_t>(csr.cells.size());
   std::uint32_t model_points = 0;
   for (const auto& d : model.depths) model_points += static_cast<std::uint32_t>(d.size());
@@ -204,7 +262,8 @@ std::vector<std::byte> serialise_table(const ModelStack& model, const BuildOptio
   std::memcpy(b + off::kMagic, tf::kMagic, sizeof tf::kMagic);
   store_le<std::uint16_t>(b + off::kVersionMajor, tf::kVersionMajor);
   // The lowest minor version that holds what the table uses.
-  store_le<std::uint16_t>(b + off::kVersionMinor, compact ? std::uint16_t{2} : images ? std::uint16_t{1} : std::uint16_t{0});
+  store_le<std::uint16_t>(b + off::kVersionMinor,
+                          channels ? std::uint16_t{3} : compact ? std::uint16_t{2} : images ? std::uint16_t{1} : std::uint16_t{0});
   store_le<std::uint32_t>(b + off::kHeaderBytes, tf::kHeaderBytes);
   store_le<std::uint32_t>(b + off::kFileBytes, layout.file_bytes);
   store_le<std::uint32_t>(b + off::kCellCount, cell_count);
@@ -235,7 +294,9 @@ std::vector<std::byte> serialise_table(const ModelStack& model, const BuildOptio
   store_le<std::uint32_t>(b + off::kReferencesOffset, layout.references);
   store_le<std::uint32_t>(b + off::kModelCountsOffset, layout.model_counts);
   store_le<std::uint32_t>(b + off::kModelPointsOffset, layout.model_points);
-  store_le<std::uint32_t>(b + off::kFlags, (images ? tf::kFlagModelImages : 0u) | (compact ? tf::kFlagCompactOffsets : 0u));
+  store_le<std::uint32_t>(b + off::kFlags, (images ? tf::kFlagModelImages : 0u) | (compact ? tf::kFlagCompactOffsets : 0u) |
+                                               (channels ? tf::kFlagOrientationChannels : 0u));
+  if (channels) store_le<std::uint8_t>(b + off::kOrientationChannels, static_cast<std::uint8_t>(stencils.channel_count));
   if (compact) {
     store_le<std::uint8_t>(b + off::kOffsetDeltaBytes, counts.offset_delta_bytes);
     store_le<std::uint8_t>(b + off::kOffsetBlockLog2, tf::kOffsetBlockLog2);

@@ -24,7 +24,7 @@ void axis_json(std::ostringstream& o, const char* name, const Axis& a) {
 
 std::string inspect_json(const TableView& t) {
   std::map<std::uint32_t, std::uint32_t> refs_per_pixel;  // refs -> pixels
-  for (std::uint32_t p = 0; p < t.roi_pixels(); ++p) ++refs_per_pixel[t.references_begin(p + 1) - t.references_begin(p)];
+  for (std::uint32_t p = 0; p < t.roi_slots(); ++p) ++refs_per_pixel[t.references_begin(p + 1) - t.references_begin(p)];
   std::uint32_t smin = UINT32_MAX, smax = 0;
   std::uint64_t ssum = 0;
   for (std::uint32_t c = 0; c < t.cell_count(); ++c) {

@@ -8,8 +8,10 @@
 
 #include <cstdint>
 #include <string>
+#include <span>
 #include <vector>
 
+#include "gabarit/roi_point.hpp"
 #include "gabarit/table_view.hpp"
 
 namespace gabarit::host {
@@ -32,7 +34,16 @@ struct HdlLayout {
 };
 
 // Throws app::Error for lanes other than 1, 2, 4, 8 or stencils above 65535 pixels.
+// With orientation channels (format 1.3) the voter addresses slots: the
+// layout's roi_width is the slots per ROI row (roi_width x channels), and
+// features go to it as hdl_features gives them.
 HdlLayout hdl_layout(const TableView& table, std::uint32_t lanes);
+
+// The kernel's features (prepare_frame) as the hardware voter takes them:
+// the same points for a position-only table; with orientation channels,
+// each feature's two slots as (slot mod slot-width, slot / slot-width), in
+// the kernel voter's order, so the counters match bit for bit.
+std::vector<RoiPoint> hdl_features(const TableView& table, std::span<const RoiPoint> features);
 
 // SystemVerilog's $clog2.
 constexpr std::uint32_t clog2(std::uint64_t n) {
