@@ -27,7 +27,7 @@ namespace off = tf::offset;
 
 std::vector<std::byte> build(const std::vector<host::Point>& points, int depths, const char* x, const char* theta,
                              table_format::DetectorKind kind, std::uint16_t threshold, double keep, bool images = false,
-                             bool compact = true) {
+                             bool compact = true, std::uint32_t channels = 0) {
   host::ModelStack model;
   for (int d = 0; d < depths; ++d) {
     std::vector<host::Point> scaled;
@@ -50,6 +50,7 @@ std::vector<std::byte> build(const std::vector<host::Point>& points, int depths,
   o.space.theta = host::parse_axis(theta, "theta");
   o.keep = keep;
   o.compact_offsets = compact;
+  o.orientation_channels = channels;
   return host::build_table(model, o);
 }
 
@@ -82,6 +83,8 @@ int main(int argc, char** argv) {
       {"rotation", build(curve, 1, "-1:1:3", "-2:2:3", gradient, 20, 1.0)},
       {"depths", build(curve, 3, "-1:1:3", "0:0:1", canny, 30, 1.0)},
       {"model-images", build(curve, 2, "-1:1:3", "-1:1:3", canny, 30, 1.0, true)},
+      {"orientation-channels", build(curve, 1, "-1:1:3", "-1:1:3", canny, 30, 1.0, true, true, 16)},  // format 1.3
+      {"orientation-channels-wide", build(curve, 2, "-1:1:3", "0:0:1", canny, 30, 1.0, true, false, 4)},
       {"decimated", build(curve, 1, "-3:3:7", "0:0:1", binary, 0, 0.3)},
       {"decimated-wide", build(curve, 1, "-3:3:7", "0:0:1", binary, 0, 0.3, false, false)},
       {"two-byte-refs", build(curve, 1, "-8:8:17", "0:0:1", binary, 0, 1.0)},
