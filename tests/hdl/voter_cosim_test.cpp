@@ -18,6 +18,9 @@
 
 #include "Vvoter_l1.h"
 #include "Vvoter_l4.h"
+#include "gabarit/app/image_io.hpp"
+#include "gabarit/host/model.hpp"
+#include "gabarit/host/table_builder.hpp"
 #include "gabarit/host/voter_trials.hpp"
 #include "gabarit/features.hpp"
 #include "gabarit/host/thesis_shapes.hpp"
@@ -214,6 +217,48 @@ TEST(VoterCosim, TablesWithFewerCellsThanLanes) {
     for (int frame = 0; frame < 4; ++frame) {
       const auto f = random_features(rng, t, frame * 3);
       EXPECT_EQ(compare(h.frame(f, t.cell_count(), 0.0, rng), kernel_outcome(t, f)), "") << x << " frame " << frame;
+    }
+  }
+}
+
+// Orientation channels (format 1.3): the voter addresses slots (hdl_layout's
+// roi_width is the slots per row) and takes each feature as its two slots
+// (hdl_features); the counters match the kernel's bit for bit. The hardware
+// counts slots as features: twice the kernel's.
+TEST(VoterCosim, OrientationChannelTables) {
+  const auto dir = std::filesystem::temp_directory_path() / "gabarit_cosim_channels";
+  std::filesystem::create_directories(dir);
+  app::GrayImage image(25, 25, 60);
+  for (std::uint32_t y = 9; y < 16; ++y)
+    for (std::uint32_t x = 8; x < 17; ++x)
+      if (!(x > 13 && y > 12)) image.at(x, y) = 220;  // a notched block: edges of four orientations
+  app::write_pgm((dir / "m.pgm").string(), image);
+  host::ImageModelOptions mo;
+  mo.canny = true;
+  const host::ModelStack model = host::model_from_images({(dir / "m.pgm").string()}, mo);
+  std::filesystem::remove_all(dir);
+  for (const std::uint32_t channels : {4u, 16u}) {
+    host::BuildOptions bo;
+    bo.space.x = host::parse_axis("-1:1:3", "x");
+    bo.space.y = host::parse_axis("-1:1:3", "y");
+    bo.space.theta = host::parse_axis("-4:4:3", "theta");
+    bo.orientation_channels = channels;
+    const auto bytes = host::build_table(model, bo);
+    const TableView t = testing::open_table(bytes);
+    ASSERT_LE(t.roi_slots(), kPixelCapacity);
+    Harness<Vvoter_l4> h;
+    h.load(host::hdl_layout(t, 4), 4);
+    host::Rng rng(channels);
+    for (int frame = 0; frame < 6; ++frame) {
+      std::vector<RoiPoint> f(static_cast<std::size_t>(5 + frame * 7));
+      for (auto& p : f) {  // kernel encoding: column, channel, upper half
+        const std::uint32_t col = rng.next_u32() % t.roi_width(), c = rng.next_u32() % channels, upper = rng.next_u32() & 1u;
+        p = {static_cast<std::uint16_t>((col << t.channel_bits()) | (c << 1) | upper),
+             static_cast<std::uint16_t>(rng.next_u32() % t.roi_height())};
+      }
+      Outcome sw = kernel_outcome(t, f);
+      sw.features *= 2;
+      EXPECT_EQ(compare(h.frame(host::hdl_features(t, f), t.cell_count(), 0.0, rng), sw), "") << channels << " channels, frame " << frame;
     }
   }
 }
