@@ -285,7 +285,8 @@ Status ModelFinder::find(const ImageView& image, const FinderOptions& options, F
   if (out.size() < options.max_count) return Status::kBufferTooSmall;
   const FinderGeometry g = finder_geometry(table_, detector_, options, image.width, image.height);
   const FinderScratchSizes need = finder_scratch_sizes(g, table_);
-  if (g.coarse_width > 65535u || g.coarse_height > 65535u) return Status::kInvalidArgument;
+  // Coarse windows are addressed in 16 bits, accumulator cells in 31.
+  if (g.coarse_width > 65535u || g.coarse_height > 65535u || need.accumulator > 0x7FFFFFFFu) return Status::kInvalidArgument;
   if (scratch.coarse_image.size() < need.coarse_pixels || scratch.coarse_features.size() < need.coarse_pixels ||
       scratch.feature_index.size() < need.coarse_pixels || scratch.accumulator.size() < need.accumulator ||
       scratch.model.size() < need.model_points || scratch.rotated.size() < 2 * need.model_points)

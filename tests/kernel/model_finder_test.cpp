@@ -63,14 +63,20 @@ struct Rig {
   }
 };
 
+// A rig, its finder with the default options, and scratch for both levels.
+struct Finding {
+  Rig rig;
+  ModelFinder finder{rig.table, detector_of(rig.table)};
+  FinderOptions options;
+  app::FinderBuffers buffers{rig.table, detector_of(rig.table), options, kSide, kSide};
+  testing::TrackerTestScratch fine{rig.table};
+};
+
 double angle_error(double a, double b) { return std::fabs(std::remainder(a - b, 360.0)); }
 
 TEST(ModelFinder, FindsTheTargetAnywhereAtAnyAngle) {
-  const Rig rig;
-  ModelFinder finder(rig.table, detector_of(rig.table));
-  const FinderOptions options;
-  app::FinderBuffers buffers(rig.table, detector_of(rig.table), options, kSide, kSide);
-  testing::TrackerTestScratch fine(rig.table);
+  Finding t;
+  auto& [rig, finder, options, buffers, fine] = t;
   host::Rng where(5), noise(6);
   for (int trial = 0; trial < 8; ++trial) {
     const float x = static_cast<float>((40 + where.next_unit() * (kSide - 80))), y = static_cast<float>((40 + where.next_unit() * (kSide - 80)));
@@ -94,11 +100,8 @@ TEST(ModelFinder, FindsTheTargetAnywhereAtAnyAngle) {
 }
 
 TEST(ModelFinder, NothingFoundWhereThereIsNothing) {
-  const Rig rig;
-  ModelFinder finder(rig.table, detector_of(rig.table));
-  const FinderOptions options;
-  app::FinderBuffers buffers(rig.table, detector_of(rig.table), options, kSide, kSide);
-  testing::TrackerTestScratch fine(rig.table);
+  Finding t;
+  auto& [rig, finder, options, buffers, fine] = t;
   host::Rng noise(8);
   std::vector<Detection> out(options.max_count);
   std::uint32_t count = 7;
@@ -108,11 +111,8 @@ TEST(ModelFinder, NothingFoundWhereThereIsNothing) {
 }
 
 TEST(ModelFinder, SameInputSameBytes) {
-  const Rig rig;
-  ModelFinder finder(rig.table, detector_of(rig.table));
-  const FinderOptions options;
-  app::FinderBuffers buffers(rig.table, detector_of(rig.table), options, kSide, kSide);
-  testing::TrackerTestScratch fine(rig.table);
+  Finding t;
+  auto& [rig, finder, options, buffers, fine] = t;
   host::Rng noise(9);
   const app::GrayImage f = rig.frame(150, 170, 77, true, noise);
   std::vector<Detection> a(options.max_count), b(options.max_count);
@@ -124,11 +124,8 @@ TEST(ModelFinder, SameInputSameBytes) {
 }
 
 TEST(ModelFinder, RefusesBadInputAndShortBuffers) {
-  const Rig rig;
-  ModelFinder finder(rig.table, detector_of(rig.table));
-  FinderOptions options;
-  app::FinderBuffers buffers(rig.table, detector_of(rig.table), options, kSide, kSide);
-  testing::TrackerTestScratch fine(rig.table);
+  Finding t;
+  auto& [rig, finder, options, buffers, fine] = t;
   host::Rng noise(10);
   const app::GrayImage f = rig.frame(100, 100, 0, true, noise);
   std::vector<Detection> out(options.max_count);
