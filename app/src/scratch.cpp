@@ -39,10 +39,11 @@ FinderBuffers::FinderBuffers(const TableView& table, const Detector& detector, c
   accumulator_.resize(n.accumulator);
   model_.resize(n.model_points);
   rotated_.resize(2 * n.model_points);
+  candidates_.resize(kMaxFinderCandidates);
 }
 
 FinderScratch FinderBuffers::scratch(TrackerScratch fine) {
-  return {coarse_image_, coarse_features_, feature_index_, accumulator_, model_, rotated_, fine};
+  return {coarse_image_, coarse_features_, feature_index_, accumulator_, model_, rotated_, candidates_, fine};
 }
 
 SessionBuffers::SessionBuffers(const TableView& fine, const TableView* coarse, VoterChoice voter, bool search_features)

@@ -65,33 +65,29 @@ void sort_points(std::span<OrientedPoint> p, bool orientation) noexcept {
   }
 }
 
-struct Peak {
-  std::int32_t x = 0, y = 0;  // coarse reference position
-  std::uint32_t rotation = 0;
-  std::uint32_t votes = 0;    // 3 x 3 sum
-};
-
-// A shortlist of peaks, one per place: a peak within `distance2` (squared,
-// coarse pixels) of a kept one replaces it if stronger, else is dropped.
+// A shortlist of coarse peaks in the caller's candidates, one per place: a
+// peak within `distance2` (squared, coarse pixels) of a kept one replaces it
+// if stronger, else is dropped.
 struct Shortlist {
-  Peak peaks[kMaxFinderCandidates];
+  FinderCandidate* peaks = nullptr;
   std::uint32_t size = 0, capacity = 0;
   std::int64_t distance2 = 0;
-
   std::uint32_t floor_votes = 0;  // what a peak must beat once the list is full
 
   std::uint32_t floor() const noexcept { return floor_votes; }
-  void offer(const Peak& p) noexcept {
-    insert(p);
+  void offer(std::int32_t x, std::int32_t y, std::uint32_t rotation, std::uint32_t votes) noexcept {
+    insert(x, y, rotation, votes);
     if (size < capacity) return;
     floor_votes = peaks[0].votes;
     for (std::uint32_t i = 1; i < size; ++i) floor_votes = peaks[i].votes < floor_votes ? peaks[i].votes : floor_votes;
   }
-  void insert(const Peak& p) noexcept {
+  void insert(std::int32_t x, std::int32_t y, std::uint32_t rotation, std::uint32_t votes) noexcept {
+    FinderCandidate p;
+    p.x = x, p.y = y, p.rotation = rotation, p.votes = votes;
     for (std::uint32_t i = 0; i < size; ++i) {
-      const std::int64_t dx = p.x - peaks[i].x, dy = p.y - peaks[i].y;
+      const std::int64_t dx = x - peaks[i].x, dy = y - peaks[i].y;
       if (dx * dx + dy * dy < distance2) {
-        if (p.votes > peaks[i].votes) peaks[i] = p;
+        if (votes > peaks[i].votes) peaks[i] = p;
         return;
       }
     }
@@ -102,19 +98,15 @@ struct Shortlist {
     std::uint32_t w = 0;
     for (std::uint32_t i = 1; i < size; ++i)
       if (peaks[i].votes < peaks[w].votes) w = i;
-    if (p.votes > peaks[w].votes) peaks[w] = p;
+    if (votes > peaks[w].votes) peaks[w] = p;
   }
 };
 
-// Ranked by score (ties: the stronger coarse peak, then the order offered).
-void insert_ranked(Detection* found, std::uint32_t& n, const Detection& d) noexcept {
-  std::uint32_t at = n;
-  while (at > 0 && (found[at - 1].score < d.score || (found[at - 1].score == d.score && found[at - 1].coarse_score < d.coarse_score))) {
-    found[at] = found[at - 1];
-    --at;
-  }
-  found[at] = d;
-  ++n;
+// Found candidates first, then by score, then by the coarse peak's; ties keep their order.
+bool ranks_above(const FinderCandidate& a, const FinderCandidate& b) noexcept {
+  if (a.found != b.found) return a.found;
+  if (a.result.score != b.result.score) return a.result.score > b.result.score;
+  return a.result.coarse_score > b.result.coarse_score;
 }
 
 float wrap_degrees(float deg) noexcept {
@@ -289,7 +281,8 @@ Status ModelFinder::find(const ImageView& image, const FinderOptions& options, F
   if (g.coarse_width > 65535u || g.coarse_height > 65535u || need.accumulator > 0x7FFFFFFFu) return Status::kInvalidArgument;
   if (scratch.coarse_image.size() < need.coarse_pixels || scratch.coarse_features.size() < need.coarse_pixels ||
       scratch.feature_index.size() < need.coarse_pixels || scratch.accumulator.size() < need.accumulator ||
-      scratch.model.size() < need.model_points || scratch.rotated.size() < 2 * need.model_points)
+      scratch.model.size() < need.model_points || scratch.rotated.size() < 2 * need.model_points ||
+      scratch.candidates.size() < options.candidates)
     return Status::kBufferTooSmall;
   const bool binary = detector_.kind == table_format::DetectorKind::kBinary;
   const std::uint32_t f = g.factor, cw = g.coarse_width, ch = g.coarse_height;
@@ -339,6 +332,7 @@ Status ModelFinder::find(const ImageView& image, const FinderOptions& options, F
   const std::uint32_t model_n = load_model(g.coarse_depth, f, g.orientation, scratch.model);
   if (model_n == 0) return Status::kOk;
   Shortlist shortlist;
+  shortlist.peaks = scratch.candidates.data();
   shortlist.capacity = options.candidates;
   const float min_distance_coarse = g.min_distance_px / static_cast<float>(f);
   shortlist.distance2 = static_cast<std::int64_t>(min_distance_coarse * min_distance_coarse) + 1;
@@ -404,7 +398,7 @@ Status ModelFinder::find(const ImageView& image, const FinderOptions& options, F
           continue;
         const std::uint32_t sum = v + up[0] + up[1] + up[2] + mid[0] + mid[1] + down[0] + down[1] + down[2];
         if (sum <= shortlist.floor()) continue;
-        shortlist.offer({static_cast<std::int32_t>(x), static_cast<std::int32_t>(y), k, sum});
+        shortlist.offer(static_cast<std::int32_t>(x), static_cast<std::int32_t>(y), k, sum);
       }
     }
   }
@@ -414,38 +408,39 @@ Status ModelFinder::find(const ImageView& image, const FinderOptions& options, F
   // are voted again from each result until it stays in place (at most
   // kFineVotes votes, as tracking frames would converge), refined within
   // the cell and verified again.
-  Detection found[kMaxFinderCandidates];
-  std::uint32_t found_n = 0;
   const float half = static_cast<float>(f - 1) * 0.5f;
-  Pose first_pose[kMaxFinderCandidates];
-  float first_score[kMaxFinderCandidates];
   float best_first = 0.0f;
   for (std::uint32_t i = 0; i < shortlist.size; ++i) {
-    const Peak& p = shortlist.peaks[i];
-    const Pose start{static_cast<float>(p.x * static_cast<std::int32_t>(f)) + half,
-                     static_cast<float>(p.y * static_cast<std::int32_t>(f)) + half,
-                     wrap_degrees(options.theta_min_deg + static_cast<float>(p.rotation) * g.theta_step_deg), g.coarse_depth};
+    FinderCandidate& c = scratch.candidates[i];
+    const Pose start{static_cast<float>(c.x * static_cast<std::int32_t>(f)) + half,
+                     static_cast<float>(c.y * static_cast<std::int32_t>(f)) + half,
+                     wrap_degrees(options.theta_min_deg + static_cast<float>(c.rotation) * g.theta_step_deg), g.coarse_depth};
+    c.result = Detection{};
+    c.result.coarse_score = static_cast<float>(c.votes) / static_cast<float>(model_n);
+    c.result.score = -1.0f;  // lost at the first vote
+    c.found = false;
     StepResult step;
     GABARIT_TRY(track_step(table_, detector_, image, start, scratch.fine, step));
-    first_score[i] = -1.0f;
     if (step.state == TrackState::kLost) continue;
-    first_pose[i] = step.pose;
-    first_pose[i].theta_deg = wrap_degrees(first_pose[i].theta_deg);
-    GABARIT_TRY(verify(image, first_pose[i], scratch, first_score[i]));
-    best_first = first_score[i] > best_first ? first_score[i] : best_first;
+    c.result.pose = step.pose;
+    c.result.pose.theta_deg = wrap_degrees(c.result.pose.theta_deg);
+    GABARIT_TRY(verify(image, c.result.pose, scratch, c.result.score));
+    best_first = c.result.score > best_first ? c.result.score : best_first;
   }
   for (std::uint32_t i = 0; i < shortlist.size; ++i) {
-    if (first_score[i] < 0.0f) continue;
-    const Peak& p = shortlist.peaks[i];
-    if (first_score[i] < kConvergeShare * best_first) {  // reported as voted once, if at all
-      if (first_score[i] >= options.min_score)
-        insert_ranked(found, found_n, {first_pose[i], first_score[i], static_cast<float>(p.votes) / static_cast<float>(model_n), 0.0f});
+    FinderCandidate& c = scratch.candidates[i];
+    if (c.result.score < 0.0f) continue;
+    if (c.result.score < kConvergeShare * best_first) {  // reported as voted once, if at all
+      c.found = c.result.score >= options.min_score;
       continue;
     }
     StepResult step;
-    Pose from = first_pose[i];
+    Pose from = c.result.pose;
     GABARIT_TRY(track_step(table_, detector_, image, from, scratch.fine, step));
-    if (step.state == TrackState::kLost) continue;
+    if (step.state == TrackState::kLost) {
+      c.result.score = -1.0f;
+      continue;
+    }
     for (std::uint32_t v = 2; v < kFineVotes; ++v) {
       const float dx = step.pose.x - from.x, dy = step.pose.y - from.y;
       const float dt = step.pose.theta_deg - from.theta_deg;
@@ -456,33 +451,40 @@ Status ModelFinder::find(const ImageView& image, const FinderOptions& options, F
       from = step.pose;
       step = next;
     }
-    const StepResult& final_step = step;
-    Detection d;
     // The last vote's counters are still in the scratch: the sub-cell
     // offset from its neighbouring cells (refinement.hpp).
-    const SubCellOffset sub = refine_within_cell(table_, scratch.fine.counters, final_step.best.cell);
-    d.pose = pose_of_cell(table_, final_step.best.cell, from, final_step.roi_centre_x, final_step.roi_centre_y, sub.x, sub.y,
-                          sub.theta_deg);
+    const SubCellOffset sub = refine_within_cell(table_, scratch.fine.counters, step.best.cell);
+    Detection& d = c.result;
+    d.pose = pose_of_cell(table_, step.best.cell, from, step.roi_centre_x, step.roi_centre_y, sub.x, sub.y, sub.theta_deg);
     if (stack_ != nullptr) {
       GABARIT_TRY(depth_by_intensity(image, d.pose, *stack_, d.pose.depth));
       for (int k = 0; k < 2; ++k) GABARIT_TRY(angle_by_intensity(image, d.pose, *stack_, d.pose.theta_deg));
     }
     d.pose.theta_deg = wrap_degrees(d.pose.theta_deg);
-    d.vote_score = final_step.score;
-    d.coarse_score = static_cast<float>(p.votes) / static_cast<float>(model_n);
+    d.vote_score = step.score;
     GABARIT_TRY(verify(image, d.pose, scratch, d.score));
-    if (d.score < options.min_score) continue;
-    insert_ranked(found, found_n, d);
+    c.found = d.score >= options.min_score;
   }
-  // Duplicates: two peaks the table moved to one place.
+  // Ranked (a stable insertion sort), then duplicates dropped: two peaks the
+  // table moved to one place.
+  for (std::uint32_t i = 1; i < shortlist.size; ++i) {
+    const FinderCandidate c = scratch.candidates[i];
+    std::uint32_t at = i;
+    while (at > 0 && ranks_above(c, scratch.candidates[at - 1])) {
+      scratch.candidates[at] = scratch.candidates[at - 1];
+      --at;
+    }
+    scratch.candidates[at] = c;
+  }
   const float d2 = g.min_distance_px * g.min_distance_px;
-  for (std::uint32_t i = 0; i < found_n && count < options.max_count; ++i) {
+  for (std::uint32_t i = 0; i < shortlist.size && scratch.candidates[i].found && count < options.max_count; ++i) {
+    const Detection& d = scratch.candidates[i].result;
     bool duplicate = false;
     for (std::uint32_t j = 0; j < count && !duplicate; ++j) {
-      const float dx = found[i].pose.x - out[j].pose.x, dy = found[i].pose.y - out[j].pose.y;
+      const float dx = d.pose.x - out[j].pose.x, dy = d.pose.y - out[j].pose.y;
       duplicate = dx * dx + dy * dy < d2;
     }
-    if (!duplicate) out[count++] = found[i];
+    if (!duplicate) out[count++] = d;
   }
   return Status::kOk;
 }

@@ -136,6 +136,9 @@ TEST(ModelFinder, RefusesBadInputAndShortBuffers) {
   FinderScratch shorter = buffers.scratch(fine.view());
   shorter.accumulator = shorter.accumulator.first(shorter.accumulator.size() - 1);
   EXPECT_EQ(finder.find(f.view(), options, shorter, out, count), Status::kBufferTooSmall);
+  FinderScratch few = buffers.scratch(fine.view());
+  few.candidates = few.candidates.first(options.candidates - 1);
+  EXPECT_EQ(finder.find(f.view(), options, few, out, count), Status::kBufferTooSmall);
   // A larger frame than the buffers were sized for.
   const app::GrayImage big(kSide + 64, kSide);
   EXPECT_EQ(finder.find(big.view(), options, buffers.scratch(fine.view()), out, count), Status::kBufferTooSmall);

@@ -31,7 +31,8 @@
 // asks for a non-zero pixel within one pixel.
 //
 // Cost: the coarse vote is about features x (points / 8) x rotations
-// increments; the fine level about candidates x 2 track_steps.
+// increments; the fine level about candidates x 2 track_steps. Stack: a few
+// hundred bytes (the candidates are the caller's scratch).
 // No heap, no recursion: scratch comes from the caller, sized by
 // finder_scratch_sizes.
 #pragma once
@@ -114,6 +115,15 @@ struct OrientedPoint {
   std::uint8_t orientation = 0;  // orientation_256 of the model image's edge
 };
 
+// One coarse peak and what the fine level made of it (FinderScratch::candidates).
+struct FinderCandidate {
+  std::int32_t x = 0, y = 0;   // the peak's reference position, coarse pixels
+  std::uint32_t rotation = 0;  // its rotation's index
+  std::uint32_t votes = 0;     // its 3 x 3 sum
+  Detection result;            // after the fine level
+  bool found = false;          // result verified at or above min_score
+};
+
 struct FinderScratch {
   std::span<std::uint8_t> coarse_image;     // coarse_pixels
   std::span<RoiPoint> coarse_features;      // coarse_pixels
@@ -121,6 +131,7 @@ struct FinderScratch {
   std::span<std::uint16_t> accumulator;     // accumulator
   std::span<OrientedPoint> model;           // model_points
   std::span<std::int32_t> rotated;          // 2 x model_points
+  std::span<FinderCandidate> candidates;    // options.candidates (kMaxFinderCandidates fits any)
   TrackerScratch fine;                      // for the table, as track_step wants it
 };
 

@@ -75,6 +75,7 @@ class FinderBuffers {
   std::vector<std::uint16_t> accumulator_;
   std::vector<OrientedPoint> model_;
   std::vector<std::int32_t> rotated_;
+  std::vector<FinderCandidate> candidates_;
 };
 
 // The session a program runs: the defaults (SessionOptions{}), or with
