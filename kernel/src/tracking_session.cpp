@@ -39,6 +39,7 @@ Status TrackingSession::start(const SessionOptions& options, const Pose& initial
 
 void TrackingSession::begin_lost() noexcept {
   lost_ = true;
+  lost_frames_ = 0;
   search_.reset();  // nearest placements first
   if (particles_ != nullptr) particles_->reset();  // the whole cloud spread again
   if (detection_ != nullptr) detection_->reset();
@@ -230,7 +231,8 @@ Status TrackingSession::recover(const ImageView& image, SessionScratch scratch, 
   SearchResult found;
   // The depth last seen with confidence: the frames since, unsure, may have
   // set the pose's depth from clutter.
-  if (detection_ != nullptr) {
+  const std::uint32_t lost_frame = lost_frames_++;
+  if (detection_ != nullptr && lost_frame >= options_.recovery.detect_after) {
     GABARIT_TRY(detection_->run(image, scratch.fine, found));
   } else if (particles_ != nullptr) {
     GABARIT_TRY(particles_->run(image, last_confident_, scratch.fine, found));

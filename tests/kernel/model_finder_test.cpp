@@ -158,10 +158,12 @@ TEST(ModelFinder, RefusesBadInputAndShortBuffers) {
 
 // Frames until the session is within 2 px of the target after it reappears at
 // (rx, ry), or -1 within `budget` frames.
-int reacquire(const Rig& rig, bool detection, float rx, float ry, int budget = 10) {
+int reacquire(const Rig& rig, bool detection, float rx, float ry, int budget = 10, std::uint32_t detect_after = 0) {
   testing::TrackerTestScratch scratch(rig.table);
   TrackingSession session(rig.table, nullptr, detector_of(rig.table));
-  EXPECT_EQ(session.start(SessionOptions{}, {60, 60, 0, 0}), Status::kOk);
+  SessionOptions so;
+  so.recovery.detect_after = detect_after;
+  EXPECT_EQ(session.start(so, {60, 60, 0, 0}), Status::kOk);
   ModelFinder finder(rig.table, detector_of(rig.table));
   const FinderOptions options;
   app::FinderBuffers buffers(rig.table, detector_of(rig.table), options, kSide, kSide);
@@ -186,6 +188,12 @@ TEST(DetectionRecovery, FindsATargetThatReappearsFarAway) {
   const int frames = reacquire(rig, true, 260, 250);
   EXPECT_GE(frames, 1);
   EXPECT_LE(frames, 3);
+  // The first detect_after lost frames search with the grid only: far
+  // away, detection then finds it later, and never if it never starts.
+  EXPECT_EQ(reacquire(rig, true, 260, 250, 10, 1000), -1);
+  const int later = reacquire(rig, true, 260, 250, 30, 20);
+  EXPECT_GT(later, frames + 2);
+  EXPECT_LE(later, 24);
 }
 
 }  // namespace

@@ -87,6 +87,7 @@ struct Options {
   bool no_particles = false;
   bool no_detection = false;
   std::uint32_t orientation_channels = 0;
+  std::uint32_t detect_after = 0;
   std::uint32_t particles = 1000;
   bool decimation = false;
   std::uint32_t scenes = 0;
@@ -374,7 +375,7 @@ constexpr const char* kHelp =
     "usage: gabarit bench [--quick] [--out DIR] [--threads N] [--frames N] [--timing-frames N]\n"
     "       gabarit bench --microscope [--quick] [--out DIR]\n"
     "       gabarit bench --suite [--quick] [--out DIR] [--scenes N] [--frames N] [--no-peer] [--no-particles] [--no-detection]\n"
-    "                     [--orientation-channels N]\n"
+    "                     [--orientation-channels N] [--detect-after N]\n"
     "       gabarit bench --decimation [--quick] [--out DIR] [--threads N]\n"
     "       gabarit bench --pipette [--quick] [--out DIR] [--frames N] [--particles N]\n"
     "       gabarit bench --regression-csv FILE\n\n"
@@ -396,7 +397,9 @@ constexpr const char* kHelp =
     "                        --frames per scene (default 160, quick 60), --no-peer skips the NCC bank,\n"
     "                        --no-particles the particle filter, --no-detection the detection rows (gabarit\n"
     "                        detect and OpenCV's pyramid matchTemplate on every frame, re-acquisition by detection);\n"
-    "                        --orientation-channels N builds the scenes' tables with N channels (format 1.3)\n"
+    "                        --orientation-channels N builds the scenes' tables with N channels (format 1.3);\n"
+    "                        --detect-after N: the re-acquisition-by-detection row searches its first N lost\n"
+    "                        frames with the grid (default 0)\n"
     "  --decimation          the decimation policies instead (docs/experiments.md, \"Decimation\"): every\n"
     "                        policy x 11 keep ratios x 26 noise levels, one-step trials and continuous\n"
     "                        sequences (500/800 frames), tuning and held-out shapes, bytes and us/frame;\n"
@@ -460,6 +463,8 @@ int main(int argc, char** argv) {
         o.no_particles = true;
       } else if (a == "--no-detection") {
         o.no_detection = true;
+      } else if (a == "--detect-after") {
+        o.detect_after = static_cast<std::uint32_t>(count(0, 1000));
       } else if (a == "--orientation-channels") {
         o.orientation_channels = static_cast<std::uint32_t>(count(0, 16));
         if (o.orientation_channels != 0 && !gabarit::table_format::valid_orientation_channels(o.orientation_channels))
@@ -488,6 +493,7 @@ int main(int argc, char** argv) {
       s.particles = !o.no_particles;
       s.detection = !o.no_detection;
       s.orientation_channels = o.orientation_channels;
+      s.detect_after = o.detect_after;
       return run_suite(s);
     }
     return run(o);

@@ -65,8 +65,8 @@ constexpr const char* kPlain = "plain loop (thesis)";
 constexpr const char* kSession = "gabarit default session";
 constexpr const char* kNcc = "OpenCV NCC bank";
 constexpr const char* kParticle = "particle filter (edges, 1000 particles)";
-constexpr const char* kSessionParticles = "default session, particle re-acquisition";
-constexpr const char* kSessionDetection = "default session, re-acquisition by detection";
+constexpr const char* kSessionParticles = "default session with particle re-acquisition";
+constexpr const char* kSessionDetection = "default session with re-acquisition by detection";
 
 bool detection_hit(const host::PoseSample& t, const Pose& p, bool depth_counts) {
   const double dt = std::remainder(static_cast<double>(p.theta_deg) - t.theta_deg, 360.0);
@@ -162,7 +162,7 @@ Measure measure(const std::vector<host::PoseSample>& poses, const std::vector<ho
 }
 
 SceneResult run_scene(std::uint32_t index, std::uint32_t frames_per_scene, const std::filesystem::path& dir, bool peer, bool particles,
-                      bool detection, std::uint32_t orientation_channels) {
+                      bool detection, std::uint32_t orientation_channels, std::uint32_t detect_after) {
   const host::SceneOptions so = host::suite_scene(index, frames_per_scene);
   char sub[16];
   std::snprintf(sub, sizeof sub, "%02u", index);
@@ -201,6 +201,7 @@ SceneResult run_scene(std::uint32_t index, std::uint32_t frames_per_scene, const
   const auto session_run = [&](bool robust, bool particle_recovery, const char* name, bool detection_recovery = false) {
     host::TrackingOptions options;
     options.detection_recovery = detection_recovery;
+    if (detection_recovery) options.session.recovery.detect_after = detect_after;
     options.session = robust ? SessionOptions{} : kPlainSession;
     options.table_focus_stack = robust;
     options.particle_recovery = particle_recovery;
@@ -409,7 +410,7 @@ int run_suite(const SuiteOptions& o) {
   csv << "index,name,half,method,within_1px,within_2px,within_1deg,depth_exact,reacquired_after,reacquired_in_reach,mean_us,p99_us\n";
   for (std::uint32_t i = 0; i < scenes; ++i) {
     std::fprintf(stderr, "\rsuite: scene %u/%u", i + 1, scenes);
-    results.push_back(run_scene(i, frames, dir, o.peer, o.particles, o.detection, o.orientation_channels));
+    results.push_back(run_scene(i, frames, dir, o.peer, o.particles, o.detection, o.orientation_channels, o.detect_after));
     const SceneResult& r = results.back();
     for (std::size_t m = 0; m < r.methods.size(); ++m) {
       const Measure& x = r.methods[m];

@@ -48,6 +48,11 @@ struct RecoveryOptions {
   std::uint32_t interval = 1;          // search every n-th lost frame (1: every one)
   std::uint32_t screen_stride = 2;     // with shared features: every n-th feature scores a placement
   std::uint32_t coarse_proposals = 8;  // with a coarse table: its best cells checked by the fine table, 1..kMaxCoarseProposals
+  // With a detection stage (TrackingSession::use_detection_recovery): the
+  // first detect_after lost frames search locally (the grid, or the coarse
+  // table), the later ones by detection over the whole frame. 0: detection
+  // from the first lost frame.
+  std::uint32_t detect_after = 0;
 };
 // True if the options are usable (strides and interval >= 1, proposals in range, a finite turn).
 bool valid(const RecoveryOptions& options) noexcept;

@@ -95,9 +95,9 @@ class TrackingSession {
   // instead of the grid search; its result is accepted by the same rule.
   void use_particle_recovery(ParticleRecovery* stage) noexcept { particles_ = stage; }
   // With a detection stage (model_finder.hpp; must outlive the session;
-  // nullptr to stop), lost frames re-acquire by detection over the whole
-  // frame; its result is accepted by the same rule. It takes precedence over
-  // a particle stage.
+  // nullptr to stop), lost frames after the first recovery.detect_after
+  // re-acquire by detection over the whole frame; its result is accepted by
+  // the same rule. It takes precedence over a particle stage.
   void use_detection_recovery(DetectionRecovery* stage) noexcept { detection_ = stage; }
 
   const Pose& pose() const noexcept { return pose_; }
@@ -137,6 +137,7 @@ class TrackingSession {
   const FocusStack* stack_ = nullptr;
   ParticleRecovery* particles_ = nullptr;
   DetectionRecovery* detection_ = nullptr;
+  std::uint32_t lost_frames_ = 0;  // frames of this lost period so far
   float depth_margin_ = 0.0f;  // this frame's measurement's (0 without one)
 };
 
