@@ -87,7 +87,7 @@ struct Options {
   bool no_particles = false;
   bool no_detection = false;
   std::uint32_t orientation_channels = 0;
-  std::uint32_t detect_after = 0;
+  std::uint32_t detect_after = gabarit::RecoveryOptions{}.detect_after;
   std::uint32_t particles = 1000;
   bool decimation = false;
   std::uint32_t scenes = 0;
@@ -399,7 +399,7 @@ constexpr const char* kHelp =
     "                        detect and OpenCV's pyramid matchTemplate on every frame, re-acquisition by detection);\n"
     "                        --orientation-channels N builds the scenes' tables with N channels (format 1.3);\n"
     "                        --detect-after N: the re-acquisition-by-detection row searches its first N lost\n"
-    "                        frames with the grid (default 0)\n"
+    "                        frames with the grid (default 2, the session's)\n"
     "  --decimation          the decimation policies instead (docs/experiments.md, \"Decimation\"): every\n"
     "                        policy x 11 keep ratios x 26 noise levels, one-step trials and continuous\n"
     "                        sequences (500/800 frames), tuning and held-out shapes, bytes and us/frame;\n"

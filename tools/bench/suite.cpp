@@ -201,8 +201,8 @@ SceneResult run_scene(std::uint32_t index, std::uint32_t frames_per_scene, const
   const auto session_run = [&](bool robust, bool particle_recovery, const char* name, bool detection_recovery = false) {
     host::TrackingOptions options;
     options.detection_recovery = detection_recovery;
-    if (detection_recovery) options.session.recovery.detect_after = detect_after;
     options.session = robust ? SessionOptions{} : kPlainSession;
+    if (detection_recovery) options.session.recovery.detect_after = detect_after;
     options.table_focus_stack = robust;
     options.particle_recovery = particle_recovery;
     std::vector<host::PoseSample> poses;

@@ -7,6 +7,8 @@
 #include <cstdint>
 #include <string>
 
+#include "gabarit/recovery_search.hpp"
+
 namespace gabarit::bench {
 
 struct SuiteOptions {
@@ -18,7 +20,7 @@ struct SuiteOptions {
   bool particles = true;          // run the particle filter too (gabarit track --tracker particle)
   bool detection = true;
   std::uint32_t orientation_channels = 0;
-  std::uint32_t detect_after = 0;  // the re-acquisition-by-detection row: lost frames searched by the grid first  // the scenes' tables: 0 position only, else 2..16 channels (format 1.3)          // detection rows: gabarit detect, OpenCV's pyramid, re-acquisition by detection
+  std::uint32_t detect_after = RecoveryOptions{}.detect_after;  // the re-acquisition-by-detection row: lost frames searched by the grid first  // the scenes' tables: 0 position only, else 2..16 channels (format 1.3)          // detection rows: gabarit detect, OpenCV's pyramid, re-acquisition by detection
 };
 
 // Writes DIR/suite.md and DIR/suite-scenes.csv; returns the exit code.

@@ -35,7 +35,7 @@ int track(const std::vector<std::string>& argv) {
              {"--theta-range", "A:B", "detection (no --init, --recovery detect): absolute angles searched (default -180:180)"},
              {"--min-score", "S", "detection: the lowest verified score accepted, 0..1 (default 0.5)"},
              {"--detect-after", "N", "--recovery detect: the first N lost frames search with the grid, the later ones\n"
-              "                          by detection (default 0: detection from the first)"},
+              "                          by detection (default 2; 0: detection from the first)"},
              {"--plain", "", "the thesis's loop: the best cell of each frame, no filter, refinement, recovery or\n"
               "                          focus stack (add --motion-filter, --refine or --recover to it one by one)"},
              {"--binary", "", "use the binary detector on frames whatever the table says"},
@@ -134,7 +134,8 @@ int track(const std::vector<std::string>& argv) {
   }
   options.detect_first = detect_first;
   if (args.has("--detect-after") && !options.detection_recovery) throw app::UsageError("--detect-after applies to --recovery detect");
-  options.session.recovery.detect_after = static_cast<std::uint32_t>(args.integer("--detect-after", 0, 0, 1000));
+  options.session.recovery.detect_after =
+      static_cast<std::uint32_t>(args.integer("--detect-after", RecoveryOptions{}.detect_after, 0, 1000));
   if ((args.has("--theta-range") || args.has("--min-score")) && !options.detection_recovery && !detect_first)
     throw app::UsageError("--theta-range and --min-score apply to detection: without --init, or with --recovery detect");
   if (detect_first && (particle || options.threads > 1))

@@ -51,8 +51,9 @@ struct RecoveryOptions {
   // With a detection stage (TrackingSession::use_detection_recovery): the
   // first detect_after lost frames search locally (the grid, or the coarse
   // table), the later ones by detection over the whole frame. 0: detection
-  // from the first lost frame.
-  std::uint32_t detect_after = 0;
+  // from the first lost frame. 2 was chosen on the scene suite's tuning half
+  // (docs/detection.md).
+  std::uint32_t detect_after = 2;
 };
 // True if the options are usable (strides and interval >= 1, proposals in range, a finite turn).
 bool valid(const RecoveryOptions& options) noexcept;
