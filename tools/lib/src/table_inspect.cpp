@@ -42,6 +42,8 @@ std::string inspect_json(const TableView& t) {
   o << "  \"bytes_per_cell\": " << static_cast<double>(t.size_bytes()) / t.cell_count() << ",\n";
   o << "  \"roi\": {\"width\": " << t.roi_width() << ", \"height\": " << t.roi_height()
     << ", \"origin_x\": " << t.roi_origin_x() << ", \"origin_y\": " << t.roi_origin_y() << "},\n";
+  // Orientation channels (format 1.3): slots per ROI pixel; the refs-per-pixel histogram then counts slots.
+  o << "  \"orientation_channels\": " << (t.orientation_channels() > 1 ? t.orientation_channels() : 0u) << ",\n";
   o << "  \"space\": {\n";
   axis_json(o, "x", t.axis_x());
   o << ",\n";
