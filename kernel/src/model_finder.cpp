@@ -391,9 +391,10 @@ Status ModelFinder::find(const ImageView& image, const FinderOptions& options, F
         const std::uint32_t v = row[x];
         if (v < 2 || 9 * v <= shortlist.floor()) continue;
         const std::uint16_t* c = row + x;
-        const std::uint32_t up[3] = {c[-astride - 1], c[-astride], c[-astride + 1]};
+        const auto s = static_cast<std::ptrdiff_t>(astride);  // signed: the row above is at -s
+        const std::uint32_t up[3] = {c[-s - 1], c[-s], c[-s + 1]};
         const std::uint32_t mid[2] = {c[-1], c[1]};
-        const std::uint32_t down[3] = {c[astride - 1], c[astride], c[astride + 1]};
+        const std::uint32_t down[3] = {c[s - 1], c[s], c[s + 1]};
         if (up[0] > v || up[1] > v || up[2] > v || mid[0] > v || mid[1] > v || down[0] > v || down[1] > v || down[2] > v)
           continue;
         const std::uint32_t sum = v + up[0] + up[1] + up[2] + mid[0] + mid[1] + down[0] + down[1] + down[2];

@@ -10,6 +10,8 @@
 //
 // GABARIT_COSIM_TABLES / GABARIT_COSIM_FRAMES scale the random part (the
 // nightly-style target `hdl-cosim-long` sets them high).
+#include <unistd.h>
+
 #include <gtest/gtest.h>
 
 #include <cstdlib>
@@ -226,7 +228,7 @@ TEST(VoterCosim, TablesWithFewerCellsThanLanes) {
 // (hdl_features); the counters match the kernel's bit for bit. The hardware
 // counts slots as features: twice the kernel's.
 TEST(VoterCosim, OrientationChannelTables) {
-  const auto dir = std::filesystem::temp_directory_path() / "gabarit_cosim_channels";
+  const auto dir = std::filesystem::temp_directory_path() / ("gabarit_cosim_channels_" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
   app::GrayImage image(25, 25, 60);
   for (std::uint32_t y = 9; y < 16; ++y)

@@ -2,6 +2,8 @@
 // kernel opens them, every voter (CSR, expanded offsets, dense masks) gives
 // the same counters, a feature votes only its channel and the nearer
 // neighbour's, and the tracker still finds the pose.
+#include <unistd.h>
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -51,7 +53,8 @@ struct Tables {
   TableView plain, channels;
   host::ModelStack model;
   Tables() {
-    const auto dir = std::filesystem::temp_directory_path() / "gabarit_channels_test";
+    // Per process: ctest runs each test case as its own process, in parallel.
+    const auto dir = std::filesystem::temp_directory_path() / ("gabarit_channels_test_" + std::to_string(::getpid()));
     std::filesystem::create_directories(dir);
     app::write_pgm((dir / "model.pgm").string(), draw_shape(81, 81, 40, 40, 0, nullptr));
     host::ImageModelOptions mo;
