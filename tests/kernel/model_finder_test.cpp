@@ -44,23 +44,9 @@ TEST(Orientation, FollowsTheAngleWithinAStep) {
   }
 }
 
-struct Rig {
-  std::vector<host::Point> points;
-  std::vector<std::byte> bytes;
-  TableView table;
-  Rig() {
-    host::Rng rng(33);
-    points = testing::random_points(rng, 70, 20, 2.0);
-    // 0.5-degree cells: a detection within 1 degree is then a cell's worth.
-    bytes = testing::build(testing::point_model(points), "-4:4:9", "-4:4:9", "-2:2:9");
-    table = testing::open_table(bytes);
-  }
-  app::GrayImage frame(float x, float y, float theta, bool visible, host::Rng& noise) const {
-    app::GrayImage g = visible ? testing::draw_points(points, x, y, theta, kSide) : app::GrayImage(kSide, kSide);
-    for (auto& v : g.pixels)
-      if (noise.bernoulli(0.005)) v = static_cast<std::uint8_t>(255 - v);
-    return g;
-  }
+// 0.5-degree cells: a detection within 1 degree is then a cell's worth.
+struct Rig : testing::PointScene {
+  Rig() : PointScene(33, 70, 20, "-4:4:9", "-2:2:9", kSide, 0.005) {}
 };
 
 // A rig, its finder with the default options, and scratch for both levels.

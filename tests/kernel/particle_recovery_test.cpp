@@ -17,22 +17,8 @@ namespace {
 
 constexpr std::uint32_t kSide = 320;
 
-struct Rig {
-  std::vector<host::Point> points;
-  std::vector<std::byte> bytes;
-  TableView table;
-  Rig() {
-    host::Rng rng(21);
-    points = testing::random_points(rng, 60, 18, 2.0);
-    bytes = testing::build(testing::point_model(points), "-4:4:9", "-4:4:9", "-2:2:5");
-    table = testing::open_table(bytes);
-  }
-  app::GrayImage frame(float x, float y, float theta, bool visible, host::Rng& noise) const {
-    app::GrayImage g = visible ? testing::draw_points(points, x, y, theta, kSide) : app::GrayImage(kSide, kSide);
-    for (auto& v : g.pixels)
-      if (noise.bernoulli(0.01)) v = static_cast<std::uint8_t>(255 - v);
-    return g;
-  }
+struct Rig : testing::PointScene {
+  Rig() : PointScene(21, 60, 18, "-4:4:9", "-2:2:5", kSide, 0.01) {}
 };
 
 // Frames until the session is within 2 px of the target after it reappears at

@@ -69,4 +69,20 @@ app::GrayImage draw_points(const std::vector<host::Point>& pts, float x, float y
   return img;
 }
 
+PointScene::PointScene(std::uint64_t seed, std::size_t n, std::int32_t half, const std::string& xy, const std::string& theta,
+                       std::uint32_t frame_side, double flip_probability)
+    : side(frame_side), flip(flip_probability) {
+  host::Rng rng(seed);
+  points = random_points(rng, n, half, 2.0);
+  bytes = build(point_model(points), xy, xy, theta);
+  table = open_table(bytes);
+}
+
+app::GrayImage PointScene::frame(float x, float y, float theta_deg, bool visible, host::Rng& noise) const {
+  app::GrayImage g = visible ? draw_points(points, x, y, theta_deg, side) : app::GrayImage(side, side);
+  for (auto& v : g.pixels)
+    if (noise.bernoulli(flip)) v = static_cast<std::uint8_t>(255 - v);
+  return g;
+}
+
 }  // namespace gabarit::testing

@@ -42,6 +42,25 @@ struct TrackerTestScratch {
   std::vector<std::uint8_t> mask;
 };
 
+// A random point model (n points in [-half, half]^2, at least 2 px apart),
+// its table over x and y `xy` and `theta`, and binary side x side frames of
+// it with each pixel flipped with probability `flip`. Not copyable: the
+// table views its own bytes.
+struct PointScene {
+  PointScene(std::uint64_t seed, std::size_t n, std::int32_t half, const std::string& xy, const std::string& theta,
+             std::uint32_t side, double flip);
+  PointScene(const PointScene&) = delete;
+  PointScene& operator=(const PointScene&) = delete;
+  // The model at (x, y, theta_deg), or an empty frame when not visible.
+  app::GrayImage frame(float x, float y, float theta_deg, bool visible, host::Rng& noise) const;
+
+  std::vector<host::Point> points;
+  std::vector<std::byte> bytes;
+  TableView table;
+  std::uint32_t side = 0;
+  double flip = 0.0;
+};
+
 // Re-seals a deliberately edited table with a correct CRC, so structural
 // checks (not the CRC) are what rejects it.
 void reseal(std::vector<std::byte>& table);
