@@ -226,6 +226,51 @@ std::string hex(std::uint32_t v) {
   return b;
 }
 
+// Spawns QEMU (`argv`), whose chardev connects to a Unix socket at
+// `socket_path` that this listens on, and returns the connection as a stream
+// transport. QEMU may also fail to start (a bad option): then its log says why.
+std::unique_ptr<Transport> start_qemu_with_socket(const std::vector<std::string>& argv, const std::string& socket_path,
+                                                  const std::string& log_path, const std::string& what, pid_t& pid) {
+  const int listener = ::socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0);
+  if (listener < 0) throw app::Error(std::string("socket: ") + std::strerror(errno));
+  sockaddr_un a{};
+  a.sun_family = AF_UNIX;
+  std::snprintf(a.sun_path, sizeof a.sun_path, "%s", socket_path.c_str());
+  ::unlink(socket_path.c_str());
+  if (::bind(listener, reinterpret_cast<sockaddr*>(&a), sizeof a) != 0 || ::listen(listener, 1) != 0) {
+    const int e = errno;
+    ::close(listener);
+    throw app::Error(socket_path + ": cannot listen: " + std::strerror(e));
+  }
+  pid = spawn(argv, -1, log_path);
+  const auto deadline = Clock::now() + std::chrono::seconds(20);
+  int fd = -1;
+  while (fd < 0) {
+    pollfd p{listener, POLLIN, 0};
+    if (::poll(&p, 1, 100) > 0) fd = ::accept4(listener, nullptr, nullptr, SOCK_CLOEXEC);
+    int status = 0;
+    if (fd < 0 && ::waitpid(pid, &status, WNOHANG) == pid) {
+      pid = -1;
+      ::close(listener);
+      throw app::Error("qemu exited before connecting its " + what + " (see " + log_path + ")");
+    }
+    if (fd < 0 && Clock::now() > deadline) {
+      ::close(listener);
+      kill_and_reap(pid);
+      throw app::Error("qemu did not connect its " + what + " within 20 s");
+    }
+  }
+  ::close(listener);
+  ::unlink(socket_path.c_str());
+  return std::make_unique<StreamTransport>(fd, fd, what);
+}
+
+std::string make_temp_dir() {
+  char dir[] = "/tmp/gabarit-hil-XXXXXX";
+  if (::mkdtemp(dir) == nullptr) throw app::Error(std::string("mkdtemp: ") + std::strerror(errno));
+  return dir;
+}
+
 class QemuDut final : public DutDriver {
  public:
   explicit QemuDut(QemuOptions o) : options_(std::move(o)) {
@@ -240,9 +285,7 @@ class QemuDut final : public DutDriver {
       throw app::Error(options_.table_path + ": " + std::to_string(bytes) + " bytes; the firmware's table slot holds " +
                        std::to_string(slot.size));
     slot_ = slot.address;
-    char dir[] = "/tmp/gabarit-hil-XXXXXX";
-    if (::mkdtemp(dir) == nullptr) throw app::Error(std::string("mkdtemp: ") + std::strerror(errno));
-    dir_ = dir;
+    dir_ = make_temp_dir();
     socket_path_ = dir_ + "/uart0.sock";
   }
   ~QemuDut() override {
@@ -270,39 +313,7 @@ class QemuDut final : public DutDriver {
 
   void start() override {
     stop();
-    const int listener = ::socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0);
-    if (listener < 0) throw app::Error(std::string("socket: ") + std::strerror(errno));
-    sockaddr_un a{};
-    a.sun_family = AF_UNIX;
-    std::snprintf(a.sun_path, sizeof a.sun_path, "%s", socket_path_.c_str());
-    ::unlink(socket_path_.c_str());
-    if (::bind(listener, reinterpret_cast<sockaddr*>(&a), sizeof a) != 0 || ::listen(listener, 1) != 0) {
-      const int e = errno;
-      ::close(listener);
-      throw app::Error(socket_path_ + ": cannot listen: " + std::strerror(e));
-    }
-    pid_ = spawn(argv(), -1, options_.log_path);
-    // QEMU connects at start-up; it may also fail to start (a bad option).
-    const auto deadline = Clock::now() + std::chrono::seconds(20);
-    int fd = -1;
-    while (fd < 0) {
-      pollfd p{listener, POLLIN, 0};
-      if (::poll(&p, 1, 100) > 0) fd = ::accept4(listener, nullptr, nullptr, SOCK_CLOEXEC);
-      int status = 0;
-      if (fd < 0 && ::waitpid(pid_, &status, WNOHANG) == pid_) {
-        pid_ = -1;
-        ::close(listener);
-        throw app::Error("qemu exited before connecting its UART (see " + options_.log_path + ")");
-      }
-      if (fd < 0 && Clock::now() > deadline) {
-        ::close(listener);
-        kill_and_reap(pid_);
-        throw app::Error("qemu did not connect its UART within 20 s");
-      }
-    }
-    ::close(listener);
-    ::unlink(socket_path_.c_str());
-    transport_ = std::make_unique<StreamTransport>(fd, fd, "cortex-m UART0");
+    transport_ = start_qemu_with_socket(argv(), socket_path_, options_.log_path, "cortex-m UART0", pid_);
   }
 
   void stop() noexcept override {
@@ -317,6 +328,82 @@ class QemuDut final : public DutDriver {
   QemuOptions options_;
   std::uint32_t slot_ = 0;
   std::string dir_, socket_path_;
+  pid_t pid_ = -1;
+  std::unique_ptr<Transport> transport_;
+};
+
+// ---- the virtual board (platform/linux/virtual-board): Debian's arm64
+// kernel in qemu-system-aarch64, the board application behind vivid and USB,
+// the relay on the virtio-serial port gabarit.hil.
+
+class VirtualBoardDut final : public DutDriver {
+ public:
+  explicit VirtualBoardDut(VirtualBoardOptions o) : options_(std::move(o)) {
+    for (const std::string* f : {&options_.board, &options_.relay, &options_.table_path})
+      if (::access(f->c_str(), R_OK) != 0) throw app::Error(*f + ": not found (build the aarch64 preset's gabarit-board and gabarit-hil-relay)");
+    for (const char* f : {"vmlinuz", "busybox", "modules/order"})
+      if (::access((options_.cache + "/" + f).c_str(), R_OK) != 0)
+        throw app::Error(options_.cache + ": no " + f + " (run platform/linux/virtual-board/prepare.sh " + options_.cache + ")");
+    dir_ = make_temp_dir();
+    socket_path_ = dir_ + "/hil.sock";
+    initramfs_ = dir_ + "/initramfs.cpio.gz";
+  }
+  ~VirtualBoardDut() override {
+    stop();
+    ::unlink(initramfs_.c_str());
+    ::rmdir(dir_.c_str());
+  }
+  std::string kind() const override { return "virtual-board"; }
+  // Booting under emulation, then a fault that reloads a module or restarts
+  // the board's program: long silences are normal.
+  std::chrono::milliseconds default_hang_timeout() const override { return std::chrono::milliseconds(90000); }
+  std::chrono::milliseconds stall_interval() const override { return std::chrono::milliseconds(500); }
+  std::string description() const override { return quoted(argv()); }
+
+  std::vector<std::string> argv() const {
+    return {options_.qemu, "-M", "virt", "-cpu", "cortex-a72", "-smp", "2", "-m", "1024", "-nographic", "-no-reboot",
+            "-nic", "none", "-kernel", options_.cache + "/vmlinuz", "-initrd", initramfs_,
+            "-append", "console=ttyAMA0 panic=-1 quiet",
+            "-device", "virtio-serial-device",
+            "-chardev", "socket,id=hil,path=" + socket_path_,
+            "-device", "virtserialport,chardev=hil,name=gabarit.hil"};
+  }
+
+  void start() override {
+    stop();
+    if (!built_) {
+      const std::vector<std::string> build = {"bash", options_.scripts + "/hil-initramfs.sh", "--cache", options_.cache,
+                                              "--board", options_.board, "--relay", options_.relay,
+                                              "--table", options_.table_path, "--window", options_.window,
+                                              "--serial", options_.serial, "--out", initramfs_};
+      const pid_t p = spawn(build, -1, options_.log_path);
+      int status = 0;
+      ::waitpid(p, &status, 0);
+      if (!WIFEXITED(status) || WEXITSTATUS(status) != 0)
+        throw app::Error("building the virtual board's initramfs failed (see " + options_.log_path + ")");
+      built_ = true;
+    }
+    transport_ = start_qemu_with_socket(argv(), socket_path_, options_.log_path, "virtio-serial port", pid_);
+  }
+
+  void stop() noexcept override {
+    // After a BYE the guest prints its logs and powers off: give it a moment.
+    for (int i = 0; i < 50 && pid_ > 0; ++i) {
+      int status = 0;
+      if (::waitpid(pid_, &status, WNOHANG) == pid_) pid_ = -1;
+      else ::usleep(100000);
+    }
+    kill_and_reap(pid_);
+    transport_.reset();
+    ::unlink(socket_path_.c_str());
+  }
+
+  Transport& transport() override { return *transport_; }
+
+ private:
+  VirtualBoardOptions options_;
+  std::string dir_, socket_path_, initramfs_;
+  bool built_ = false;
   pid_t pid_ = -1;
   std::unique_ptr<Transport> transport_;
 };
@@ -372,5 +459,9 @@ std::unique_ptr<DutDriver> make_process_dut(std::string kind, std::vector<std::s
 }
 
 std::unique_ptr<DutDriver> make_qemu_dut(const QemuOptions& options) { return std::make_unique<QemuDut>(options); }
+
+std::unique_ptr<DutDriver> make_virtual_board_dut(const VirtualBoardOptions& options) {
+  return std::make_unique<VirtualBoardDut>(options);
+}
 
 }  // namespace gabarit::hil

@@ -7,6 +7,7 @@
 
 #include "gabarit/app/error.hpp"
 #include "gabarit/host/rng.hpp"
+#include "gabarit/link/rig_faults.hpp"
 
 namespace gabarit::hil {
 namespace {
@@ -35,14 +36,19 @@ const char* fault_name(FaultKind kind) {
     case FaultKind::kCorrupt: return "corrupt";
     case FaultKind::kBitflip: return "bitflip";
     case FaultKind::kRestart: return "restart";
+    default: return link::rig_fault_name(static_cast<link::RigFault>(rig_fault_number(kind)));
   }
-  return "unknown";
 }
 
 FaultKind parse_fault_kind(const std::string& text, const std::string& where) {
   for (const FaultKind k : kAllFaultKinds)
     if (text == fault_name(k)) return k;
-  throw app::Error(where + ": unknown fault '" + text + "' (want drop, duplicate, reorder, corrupt, bitflip or restart)");
+  for (const FaultKind k : kRigFaultKinds)
+    if (text == fault_name(k)) return k;
+  std::string all;
+  for (const FaultKind k : kAllFaultKinds) all += std::string(all.empty() ? "" : ", ") + fault_name(k);
+  for (const FaultKind k : kRigFaultKinds) all += std::string(", ") + fault_name(k);
+  throw app::Error(where + ": unknown fault '" + text + "' (want one of " + all + ")");
 }
 
 const PlannedFault* FaultPlan::at(std::uint32_t frame) const {
@@ -89,7 +95,33 @@ FaultPlan random_fault_plan(double probability, std::uint32_t frames, std::uint6
   return plan;
 }
 
+FaultPlan cycle_fault_plan(std::uint32_t every, const std::vector<FaultKind>& kinds, std::uint32_t frames) {
+  if (every < 2) throw app::Error("--faults cycle:N wants N >= 2 (a reorder swaps a frame with the next)");
+  if (kinds.empty()) throw app::Error("--faults cycle:N:KINDS wants at least one kind");
+  FaultPlan plan;
+  std::size_t next = 0;
+  for (std::uint64_t f = every; f + 1 < frames; f += every) plan.faults.push_back({static_cast<std::uint32_t>(f), kinds[next++ % kinds.size()]});
+  check_plan(plan, frames, "cycle plan");
+  return plan;
+}
+
 FaultPlan parse_fault_plan(const std::string& spec, std::uint32_t frames, std::uint64_t seed) {
+  if (spec.rfind("cycle:", 0) == 0) {
+    const std::string rest = spec.substr(6);
+    const auto colon = rest.find(':');
+    const std::string n = rest.substr(0, colon);
+    char* end = nullptr;
+    const unsigned long every = std::strtoul(n.c_str(), &end, 10);
+    if (n.empty() || *end != '\0' || every > 0xFFFFFFFFul) throw app::Error("--faults '" + spec + "': want cycle:N:KIND,KIND,...");
+    std::vector<FaultKind> kinds;
+    if (colon == std::string::npos) {
+      kinds.assign(std::begin(kAllFaultKinds), std::end(kAllFaultKinds));
+    } else {
+      std::stringstream list(rest.substr(colon + 1));
+      for (std::string k; std::getline(list, k, ',');) kinds.push_back(parse_fault_kind(k, "--faults " + spec));
+    }
+    return cycle_fault_plan(static_cast<std::uint32_t>(every), kinds, frames);
+  }
   if (spec.rfind("random:", 0) == 0) {
     const std::string p = spec.substr(7);
     char* end = nullptr;

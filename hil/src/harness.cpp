@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
+#include <fstream>
 #include <filesystem>
 #include <map>
 #include <set>
@@ -142,6 +144,9 @@ class Run {
   void resolve(std::uint32_t frame, Fate fate, const std::string& reason, const link::PoseReport* pose = nullptr);
   void send_frame(std::uint32_t index, const app::GrayImage& image, const PlannedFault* fault);
   void ping();
+  void inject(std::uint32_t index, const PlannedFault& fault);
+  void restart_reported();
+  void sample_soak(std::uint32_t frames_sent);
   double since_start_us() const { return std::chrono::duration<double, std::micro>(Clock::now() - t0_).count(); }
 
   const RunConfig& config_;
@@ -173,6 +178,8 @@ class Run {
   double codec_seconds_ = 0;
   std::uint32_t window_ = 1;
   std::size_t max_payload_ = link::kMinPayload;
+  bool dut_restarted_ = false;  // an EVENT restart/boot: the rig restarted the DUT behind it
+  std::uint32_t soak_from_ = 0;  // the first frame of the soak window being measured
 };
 
 std::vector<std::byte> Run::encode(MessageType type, std::span<const std::byte> payload) {
@@ -206,6 +213,13 @@ void Run::resolve(std::uint32_t frame, Fate fate, const std::string& reason, con
     r.latency_us = since_start_us() - r.sent_us;
     if (caps_.clock_hz != 0 && pose->done >= pose->received)
       r.dut_us = static_cast<double>(pose->done - pose->received) * 1e6 / caps_.clock_hz;
+    const double tick_us = caps_.clock_hz != 0 ? 1e6 / caps_.clock_hz : 0;
+    if (pose->captured != 0 && tick_us > 0) {
+      if (pose->captured >= pose->received) r.camera_us = static_cast<double>(pose->captured - pose->received) * tick_us;
+      if (pose->done >= pose->captured) r.track_us = static_cast<double>(pose->done - pose->captured) * tick_us;
+    }
+    if (pose->strobed != 0 && pose->strobed >= pose->done && tick_us > 0)
+      r.strobe_us = static_cast<double>(pose->strobed - pose->done) * tick_us;
     if (static_cast<std::int64_t>(frame) <= last_pose_frame_) ++result_.out_of_order;
     last_pose_frame_ = std::max<std::int64_t>(last_pose_frame_, frame);
     last_pose_ = pose->pose;
@@ -267,8 +281,29 @@ void Run::handle(const std::vector<std::byte>& message) {
         case link::EventKind::kDuplicate:
           if (e.frame_id < result_.frames.size()) ++result_.frames[e.frame_id].repeats;
           break;
-        case link::EventKind::kRestart: break;
+        case link::EventKind::kRestart:
+          // The rig restarted the DUT's program behind it: its tracker starts
+          // over, so the run does (a new HELLO, the reference too).
+          if (e.reason == link::EventReason::kBoot) dut_restarted_ = true;
+          break;
       }
+      break;
+    }
+    case MessageType::kInjected: {
+      link::Injected in;
+      if (!decoded(in)) break;
+      if (in.token >= result_.faults.size() || result_.faults[in.token].answered) {
+        ++result_.unknown_answers;
+        break;
+      }
+      InjectedFault& f = result_.faults[in.token];
+      f.answered = true;
+      f.ended_us = since_start_us();
+      f.detected = in.outcome == link::InjectOutcome::kDetected;
+      f.evidence = std::string(link::inject_outcome_name(in.outcome)) + ": " + in.evidence +
+                   (in.attempts > 1 ? " (" + std::to_string(in.attempts) + " injections)" : "");
+      if (caps_.clock_hz != 0 && in.ended >= in.started)
+        f.detail += "; lasted " + std::to_string(static_cast<long long>((in.ended - in.started) * 1000 / caps_.clock_hz)) + " ms on the DUT";
       break;
     }
     case MessageType::kPong: {
@@ -332,6 +367,7 @@ bool Run::pump(Clock::time_point deadline, Done done) {
         last_activity_ = Clock::now();
         handle(*m);
       }
+      if (dut_restarted_ && !awaiting_caps_) restart_reported();
     } catch (const app::Error& e) {
       if (awaiting_caps_) throw RunAborted{std::string("the DUT did not start: ") + e.what()};
       restart(RestartCause::kCrashed, std::string("the DUT crashed or closed the link: ") + e.what());
@@ -404,6 +440,58 @@ void Run::restart(RestartCause cause, const std::string& why) {
     if (r.frame >= next_frame_) r.run = run_id_ - 1;
 }
 
+void Run::restart_reported() {
+  dut_restarted_ = false;
+  ++result_.restarts_reported;
+  const std::vector<std::uint32_t> lost(outstanding_.begin(), outstanding_.end());
+  for (const std::uint32_t f : lost) resolve(f, Fate::kLostInRestart, "the DUT's rig restarted it (its program ended or was killed)");
+  ping_outstanding_ = false;
+  handshake(last_pose_, next_frame_);
+  for (auto& r : result_.frames)
+    if (r.frame >= next_frame_) r.run = run_id_ - 1;
+}
+
+// A rig fault: the DUT's rig does it before the frame is sent, and answers
+// when it is over (a sequence wrap ends later, while frames go on).
+void Run::inject(std::uint32_t index, const PlannedFault& fault) {
+  const auto token = static_cast<std::uint32_t>(result_.frames[index].fault);
+  InjectedFault& f = result_.faults[token];
+  f.detail = "injected by the DUT's rig before frame " + std::to_string(index);
+  const link::Inject request{token, rig_fault_number(fault.kind)};
+  std::byte b[link::kInjectBytes];
+  send(encode(MessageType::kInject, std::span(b, link::encode(request, b))));
+  if (fault.kind == FaultKind::kSequenceWrap) return;
+  if (!pump(Clock::now() + dut_.hang_timeout(), [&] { return result_.faults[token].answered; }))
+    result_.faults[token].evidence = "no answer from the rig in " + std::to_string(dut_.hang_timeout().count()) + " ms";
+}
+
+std::uint64_t resident_kib() {
+  std::ifstream status("/proc/self/status");
+  std::string line;
+  while (std::getline(status, line))
+    if (line.rfind("VmRSS:", 0) == 0) return std::strtoull(line.c_str() + 6, nullptr, 10);
+  return 0;
+}
+
+void Run::sample_soak(std::uint32_t frames_sent) {
+  stats_received_ = false;
+  send(encode(MessageType::kStats, {}));
+  pump(Clock::now() + std::chrono::seconds(5), [&] { return stats_received_; });
+  std::vector<double> latency;
+  for (std::uint32_t i = soak_from_; i < frames_sent && i < result_.frames.size(); ++i)
+    if (result_.frames[i].latency_us >= 0) latency.push_back(result_.frames[i].latency_us);
+  const LatencySummary l = summarise(latency);
+  SoakSample s;
+  s.frames = frames_sent;
+  s.seconds = since_start_us() / 1e6;
+  s.host_rss_kib = resident_kib();
+  s.dut_rss_kib = result_.dut_stats ? result_.dut_stats->resident_kib : 0;
+  s.latency_p50_us = l.p50;
+  s.latency_p99_us = l.p99;
+  result_.soak.push_back(s);
+  soak_from_ = frames_sent;
+}
+
 void Run::send_frame(std::uint32_t index, const app::GrayImage& image, const PlannedFault* fault) {
   const auto start = Clock::now();
   FrameRecord& record = result_.frames[index];
@@ -459,6 +547,7 @@ void Run::send_frame(std::uint32_t index, const app::GrayImage& image, const Pla
         break;
       }
       case FaultKind::kRestart: injected.detail = "the DUT stopped and started again before the frame"; break;
+      default: break;  // a rig fault: done before the frame (inject)
     }
   }
   const bool drop = fault != nullptr && fault->kind == FaultKind::kDrop;
@@ -528,6 +617,34 @@ void Run::judge_faults() {
         last_affected = f.frame + 1;
         break;
       }
+      case FaultKind::kCameraError:
+      case FaultKind::kCameraDrop:
+      case FaultKind::kSequenceWrap:
+      case FaultKind::kCameraDisconnect:
+      case FaultKind::kModuleReload:
+      case FaultKind::kUsbStall:
+      case FaultKind::kUsbUnplug:
+      case FaultKind::kUsbTimeout:
+      case FaultKind::kBoardKill:
+      case FaultKind::kUsbCorrupt: {
+        // The rig's own checks detected it (INJECTED); tracking again means a
+        // pose matching the reference after the fault's end, within 1 s.
+        if (!f.answered) f.evidence = f.evidence.empty() ? "the rig never answered" : f.evidence;
+        last_affected = f.frame > 0 ? f.frame - 1 : 0;
+        const std::string problem = clean_pose_after(last_affected);
+        double first = -1;
+        for (const FrameRecord& p : result_.frames)
+          if (p.fate == Fate::kPose && p.reference == 1 && f.ended_us >= 0 && p.sent_us + p.latency_us >= f.ended_us) {
+            const double at = p.sent_us + p.latency_us;
+            if (first < 0 || at < first) first = at;
+          }
+        if (first >= 0) f.recovery_ms = (first - f.ended_us) / 1000.0;
+        f.recovered = problem.empty() && f.answered && f.recovery_ms >= 0 && f.recovery_ms <= 1000.0;
+        if (!problem.empty()) f.evidence += "; not recovered: " + problem;
+        else if (f.recovery_ms > 1000.0) f.evidence += "; tracking again only after " + std::to_string(f.recovery_ms) + " ms";
+        else if (f.recovery_ms >= 0) f.evidence += "; tracking again " + std::to_string(static_cast<int>(f.recovery_ms)) + " ms after";
+        continue;
+      }
       case FaultKind::kRestart:
         f.detected = r.run > 0;  // the DUT came back with a new run
         f.evidence = "the DUT restarted before frame " + std::to_string(f.frame) + " (run " + std::to_string(r.run) + "); frame " +
@@ -561,11 +678,15 @@ void Run::execute() {
                    static_cast<std::uint16_t>(truth[0].depth)};
   }
   last_pose_ = initial;
-  result_.frames_total = config_.max_frames;
-  result_.frames.resize(config_.max_frames);
-  for (std::uint32_t i = 0; i < config_.max_frames; ++i) result_.frames[i].frame = i;
+  const std::uint32_t per_loop = config_.max_frames;
+  const std::uint64_t total64 = std::uint64_t{per_loop} * std::max<std::uint32_t>(config_.loops, 1);
+  if (total64 > 0xFFFFFFFEull) throw app::Error("--soak: too many frames in all");
+  const auto total = static_cast<std::uint32_t>(total64);
+  result_.frames_total = total;
+  result_.frames.resize(total);
+  for (std::uint32_t i = 0; i < total; ++i) result_.frames[i].frame = i;
   for (const PlannedFault& f : config_.faults.faults) {
-    if (f.frame >= config_.max_frames) continue;
+    if (f.frame >= total) continue;
     result_.frames[f.frame].fault = static_cast<int>(result_.faults.size());
     result_.faults.push_back({f.frame, f.kind, "", false, false, ""});
   }
@@ -579,8 +700,11 @@ void Run::execute() {
   handshake(initial, 0);
   auto last_progress = Clock::now();
   app::GrayImage image;
-  for (std::uint32_t k = 0; k < config_.max_frames; ++k) {
-    if (!frames->next(image)) throw RunAborted{frames_path + ": ended at frame " + std::to_string(k)};
+  const bool soak = config_.loops > 1;
+  for (std::uint32_t k = 0; k < total; ++k) {
+    if (k > 0 && k % per_loop == 0) frames = app::open_frames(frames_path);  // the next loop of a soak
+    if (!frames->next(image)) throw RunAborted{frames_path + ": ended at frame " + std::to_string(k % per_loop)};
+    if (soak && k > 0 && k % config_.soak_window == 0) sample_soak(k);
     if (image.width > 0xFFFF || image.height > 0xFFFF || image.pixels.size() > caps_.max_frame_bytes)
       throw RunAborted{"frame " + std::to_string(k) + " is " + std::to_string(image.width) + "x" + std::to_string(image.height) +
                        "; the DUT takes frames of at most " + std::to_string(caps_.max_frame_bytes) + " pixels"};
@@ -604,29 +728,38 @@ void Run::execute() {
       pump(Clock::time_point::max(), room);
     }
     next_frame_ = k;
+    if (fault != nullptr && is_rig_fault(fault->kind)) inject(k, *fault);
+    next_frame_ = k;
     send_frame(k, image, fault);
     images_[k] = std::move(image);
     image = app::GrayImage{};
     pump(Clock::now(), [] { return false; });
     if (config_.progress && Clock::now() - last_progress >= std::chrono::seconds(1)) {
-      config_.progress(k + 1 - static_cast<std::uint32_t>(outstanding_.size()), config_.max_frames);
+      config_.progress(k + 1 - static_cast<std::uint32_t>(outstanding_.size()), total);
       last_progress = Clock::now();
     }
   }
-  next_frame_ = config_.max_frames;
+  next_frame_ = total;
   if (!held_.empty()) {  // cannot happen (no reorder on the last frame), but never leave one unsent
     for (const auto& m : held_) send(m);
     held_.clear();
     held_frame_ = link::kNoFrame;
   }
   pump(Clock::time_point::max(), [&] { return outstanding_.empty(); });
+  // Rig faults that end on their own time (a sequence wrap) answer by now.
+  pump(Clock::now() + dut_.hang_timeout(), [&] {
+    for (const InjectedFault& f : result_.faults)
+      if (is_rig_fault(f.kind) && !f.answered && result_.frames[f.frame].sent_us >= 0) return false;
+    return true;
+  });
+  if (soak) sample_soak(total);
   // The DUT's counters, then goodbye; neither is worth waiting long for.
   send(encode(MessageType::kStats, {}));
   pump(Clock::now() + std::chrono::seconds(5), [&] { return stats_received_; });
   std::byte b[link::kByeBytes];
-  send(encode(MessageType::kBye, std::span(b, link::encode(link::Bye{0, config_.max_frames - 1}, b))));
+  send(encode(MessageType::kBye, std::span(b, link::encode(link::Bye{0, total - 1}, b))));
   pump(Clock::now() + std::chrono::seconds(5), [&] { return bye_received_; });
-  if (config_.progress) config_.progress(config_.max_frames, config_.max_frames);
+  if (config_.progress) config_.progress(total, total);
   result_.host_codec_seconds = codec_seconds_ + wire().framing_seconds();
 }
 

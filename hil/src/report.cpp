@@ -72,6 +72,7 @@ double error_px(const FrameRecord& r, const std::map<std::uint32_t, host::PoseSa
 
 struct Figures {
   LatencySummary latency, dut, cycles;
+  LatencySummary camera, track, strobe;  // a camera DUT's stages
   double overhead_bytes = 0, codec_us = 0;
   std::map<Fate, std::size_t> fates;
   std::size_t sent = 0, poses = 0, matching = 0;
@@ -79,7 +80,7 @@ struct Figures {
 
 Figures figures(const RunResult& result) {
   Figures f;
-  std::vector<double> latency, dut, cycles;
+  std::vector<double> latency, dut, cycles, camera, track, strobe;
   double overhead = 0;
   std::size_t clean = 0;
   for (const FrameRecord& r : result.frames) {
@@ -91,12 +92,18 @@ Figures figures(const RunResult& result) {
     ++f.poses;
     f.matching += r.reference == 1;
     latency.push_back(r.latency_us);
+    if (r.camera_us >= 0) camera.push_back(r.camera_us);
+    if (r.track_us >= 0) track.push_back(r.track_us);
+    if (r.strobe_us >= 0) strobe.push_back(r.strobe_us);
     if (r.dut_us >= 0) dut.push_back(r.dut_us);
     if (r.pose->cycles != 0) cycles.push_back(static_cast<double>(r.pose->cycles));
   }
   f.latency = summarise(latency);
   f.dut = summarise(dut);
   f.cycles = summarise(cycles);
+  f.camera = summarise(camera);
+  f.track = summarise(track);
+  f.strobe = summarise(strobe);
   if (clean > 0) f.overhead_bytes = overhead / static_cast<double>(clean);
   if (f.sent > 0) f.codec_us = result.host_codec_seconds * 1e6 / static_cast<double>(f.sent);
   return f;
@@ -197,7 +204,8 @@ void write_report(const std::string& dir, const RunConfig& config, const RunResu
   const std::vector<Check> checks = run_checks(result);
 
   // frames.csv and poses.csv
-  std::string frames = std::string(app::kPoseCsvHeader) + ",fate,reason,reference,latency_us,dut_us,cycles,wire_bytes,fault\n";
+  std::string frames = std::string(app::kPoseCsvHeader) +
+                       ",fate,reason,reference,latency_us,dut_us,cycles,wire_bytes,fault,camera_us,track_us,strobe_us\n";
   std::string poses = std::string(app::kPoseCsvHeader) + "\n";
   for (const FrameRecord& r : result.frames) {
     if (r.sent_us < 0 && r.fate == Fate::kPending) continue;  // never reached (a run that stopped early)
@@ -206,12 +214,21 @@ void write_report(const std::string& dir, const RunConfig& config, const RunResu
     frames += pose_columns(r) + "," + fate_name(r.fate) + "," + reason + "," + reference_text(r.reference) + "," +
               (r.pose ? num(r.latency_us, 1) : "") + "," + (r.pose && r.dut_us >= 0 ? num(r.dut_us, 1) : "") + "," +
               (r.pose ? std::to_string(r.pose->cycles) : "") + "," + std::to_string(r.wire_bytes) + "," +
-              (r.fault >= 0 ? fault_name(result.faults[static_cast<std::size_t>(r.fault)].kind) : "") + "\n";
+              (r.fault >= 0 ? fault_name(result.faults[static_cast<std::size_t>(r.fault)].kind) : "") + "," +
+              (r.camera_us >= 0 ? num(r.camera_us, 0) : "") + "," + (r.track_us >= 0 ? num(r.track_us, 0) : "") + "," +
+              (r.strobe_us >= 0 ? num(r.strobe_us, 0) : "") + "\n";
     if (r.pose) poses += pose_columns(r) + "\n";
   }
   app::write_file((d / "frames.csv").string(), frames);
   app::write_file((d / "poses.csv").string(), poses);
   app::write_file((d / "faults.csv").string(), fault_file_text(config.faults));
+  if (!result.soak.empty()) {
+    std::string soak = "frames,seconds,host_rss_kib,dut_rss_kib,latency_p50_us,latency_p99_us\n";
+    for (const SoakSample& x : result.soak)
+      soak += std::to_string(x.frames) + "," + num(x.seconds, 1) + "," + std::to_string(x.host_rss_kib) + "," +
+              std::to_string(x.dut_rss_kib) + "," + num(x.latency_p50_us, 1) + "," + num(x.latency_p99_us, 1) + "\n";
+    app::write_file((d / "soak.csv").string(), soak);
+  }
 
   // Accuracy against ground truth, over the frames the run had.
   std::string accuracy = "null";
@@ -248,9 +265,12 @@ void write_report(const std::string& dir, const RunConfig& config, const RunResu
     first = false;
   }
   s << "},\n  \"poses_matching_reference\": " << f.matching << ",\n  \"restarts\": {\"planned\": " << result.restarts_planned
-    << ", \"hung\": " << result.restarts_hung << ", \"crashed\": " << result.restarts_crashed << "},\n"
+    << ", \"hung\": " << result.restarts_hung << ", \"crashed\": " << result.restarts_crashed
+    << ", \"by_the_rig\": " << result.restarts_reported << "},\n"
     << "  \"latency_us\": " << latency_json(f.latency) << ",\n  \"dut_time_us\": " << latency_json(f.dut)
     << ",\n  \"voter_cycles\": " << latency_json(f.cycles) << ",\n"
+    << "  \"stages_us\": {\"camera\": " << latency_json(f.camera) << ", \"track\": " << latency_json(f.track)
+    << ", \"strobe\": " << latency_json(f.strobe) << "},\n"
     << "  \"overhead_per_frame\": {\"bytes\": " << num(f.overhead_bytes, 1) << ", \"host_us\": " << num(f.codec_us, 2)
     << ", \"wire_bytes_total\": " << result.wire_bytes << ", \"pixel_bytes_total\": " << result.pixel_bytes_sent << "},\n"
     << "  \"faults\": [";
@@ -258,7 +278,9 @@ void write_report(const std::string& dir, const RunConfig& config, const RunResu
     const InjectedFault& x = result.faults[i];
     s << (i ? ",\n    " : "\n    ") << "{\"frame\": " << x.frame << ", \"kind\": " << json_string(fault_name(x.kind))
       << ", \"detail\": " << json_string(x.detail) << ", \"detected\": " << (x.detected ? "true" : "false")
-      << ", \"recovered\": " << (x.recovered ? "true" : "false") << ", \"evidence\": " << json_string(x.evidence) << "}";
+      << ", \"recovered\": " << (x.recovered ? "true" : "false") << ", \"evidence\": " << json_string(x.evidence);
+    if (x.recovery_ms >= 0) s << ", \"recovery_ms\": " << num(x.recovery_ms, 1);
+    s << "}";
   }
   s << (result.faults.empty() ? "" : "\n  ") << "],\n  \"dut_stats\": ";
   if (result.dut_stats) {
@@ -267,9 +289,17 @@ void write_report(const std::string& dir, const RunConfig& config, const RunResu
       << ", \"unknown_type\": " << t.unknown_type << ", \"framing_errors\": " << t.framing_errors
       << ", \"sequence_gaps\": " << t.sequence_gaps << ", \"stale\": " << t.stale << ", \"frames_taken\": " << t.frames_taken
       << ", \"frames_tracked\": " << t.frames_tracked << ", \"frames_dropped\": " << t.frames_dropped
-      << ", \"frames_skipped\": " << t.frames_skipped << ", \"messages_out\": " << t.messages_out << "}";
+      << ", \"frames_skipped\": " << t.frames_skipped << ", \"messages_out\": " << t.messages_out
+      << ", \"resident_kib\": " << t.resident_kib << "}";
   } else {
     s << "null";
+  }
+  if (!result.soak.empty()) {
+    const SoakSample& a0 = result.soak.front();
+    const SoakSample& a1 = result.soak.back();
+    s << ",\n  \"soak\": {\"samples\": " << result.soak.size() << ", \"host_rss_kib\": [" << a0.host_rss_kib << ", "
+      << a1.host_rss_kib << "], \"dut_rss_kib\": [" << a0.dut_rss_kib << ", " << a1.dut_rss_kib
+      << "], \"latency_p50_us\": [" << num(a0.latency_p50_us, 1) << ", " << num(a1.latency_p50_us, 1) << "]}";
   }
   s << ",\n  \"accuracy\": " << accuracy << ",\n  \"checks_failed\": " << failed << ",\n  \"checks\": [";
   for (std::size_t i = 0; i < checks.size(); ++i)
@@ -365,6 +395,13 @@ void write_report(const std::string& dir, const RunConfig& config, const RunResu
   m << "\n## Timing\n\n| | p50 | p99 | max |\n|---|---|---|---|\n| latency, sent to pose (us) | " << num(f.latency.p50, 1) << " | "
     << num(f.latency.p99, 1) << " | " << num(f.latency.max, 1) << " |\n| DUT time, received to done (us, its clock at "
     << c.clock_hz << " Hz) | " << num(f.dut.p50, 1) << " | " << num(f.dut.p99, 1) << " | " << num(f.dut.max, 1) << " |\n";
+ if (f.camera.samples)
+    m << "| camera: shown to captured (us) | " << num(f.camera.p50, 0) << " | " << num(f.camera.p99, 0) << " | " << num(f.camera.max, 0)
+      << " |\n| tracking: captured to pose (us) | " << num(f.track.p50, 0) << " | " << num(f.track.p99, 0) << " | "
+      << num(f.track.max, 0) << " |\n";
+  if (f.strobe.samples)
+    m << "| strobe: pose to the line's edge (us) | " << num(f.strobe.p50, 0) << " | " << num(f.strobe.p99, 0) << " | "
+      << num(f.strobe.max, 0) << " |\n";
   if (f.cycles.samples)
     m << "| voter cycles per frame | " << num(f.cycles.p50, 0) << " | " << num(f.cycles.p99, 0) << " | " << num(f.cycles.max, 0) << " |\n";
   m << "\nProtocol overhead per frame: " << num(f.overhead_bytes, 1)

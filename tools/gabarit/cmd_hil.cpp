@@ -23,12 +23,17 @@ std::string beside_this_program(const std::string& name) {
   return ((ec ? std::filesystem::path(".") : self.parent_path()) / name).string();
 }
 
-std::uint32_t count_frames(const std::string& path) {
+struct SequenceShape {
+  std::uint32_t frames = 0, width = 0, height = 0;
+};
+SequenceShape sequence_shape(const std::string& path) {
   auto frames = app::open_frames(path);
   app::GrayImage image;
-  std::uint32_t n = 0;
-  while (frames->next(image)) ++n;
-  return n;
+  SequenceShape s;
+  while (frames->next(image)) {
+    if (s.frames++ == 0) s.width = image.width, s.height = image.height;
+  }
+  return s;
 }
 
 // A report folder is written into only if it is new, empty, or a previous
@@ -55,8 +60,8 @@ int hil(const std::vector<std::string>& argv) {
   const std::vector<std::string> rest(argv.begin() + (argv[0] == "run" ? 1 : 0), argv.end());
   app::Args args(
       "hil run",
-      "--dut inprocess|verilator|cortex-m --sequence DIR --report DIR [--table T] [--init X,Y[,THETA[,DEPTH]]] [--rate FPS]\n"
-      "       [--faults FILE|random:P] [--frames N] [--seed S]",
+      "--dut inprocess|verilator|cortex-m|virtual-board --sequence DIR --report DIR [--table T] [--init X,Y[,THETA[,DEPTH]]] [--rate FPS]\n"
+      "       [--faults FILE|random:P|cycle:N:KINDS] [--frames N] [--seed S] [--soak N]",
       "Replays a recorded sequence (DIR/frames.y4m, DIR/gt.csv if any) into a device under test over the HIL link\n"
       "(docs/hil-protocol.md), collects every pose, accounts for every frame (a pose, or why not), checks each pose\n"
       "bit for bit against the host's own tracking of the same frames with the same table, injects faults on the\n"
@@ -64,17 +69,24 @@ int hil(const std::vector<std::string>& argv) {
       "faults.csv (the plan, to replay), report.md with SVG plots. Exit status 0 when every check passes, 1 otherwise.\n"
       "DUTs: inprocess (the kernel's TrackingSession on a thread, loopback or UDP link), verilator (the hardware\n"
       "voter, Verilated, in gabarit-hil-verilator: the thesis's loop with the voter in RTL), cortex-m (the HIL\n"
-      "firmware in qemu-system-arm, the table loaded into its flash slot, its UART0 on a socket).",
-      {{"--dut", "KIND", "inprocess, verilator or cortex-m", false, true},
+      "firmware in qemu-system-arm, the table loaded into its flash slot, its UART0 on a socket), virtual-board (the\n"
+      "board application on Debian's arm64 kernel in qemu-system-aarch64: frames through vivid and V4L2, poses over a\n"
+      "USB FunctionFS gadget, GPIO through gpio-sim, bridged by a relay in the guest on a virtio-serial port).",
+      {{"--dut", "KIND", "inprocess, verilator, cortex-m or virtual-board", false, true},
        {"--sequence", "DIR", "folder with frames.y4m and, optionally, gt.csv (gabarit synth writes both)", false, true},
        {"--report", "DIR", "folder for the report (new, empty, or a previous report)", false, true},
        {"--table", "T", "the table (default DIR/table.gbt); the DUT must hold the same (HELLO carries its CRC)"},
        {"--init", "X,Y[,THETA[,DEPTH]]", "the pose before the first frame (default: gt.csv's first row)"},
        {"--rate", "FPS", "send frames at this rate, dropping those the DUT is too busy for (default: as fast as it takes them)"},
-       {"--faults", "FILE|random:P", "faults to inject: a plan file (FRAME KIND per line; see faults.csv of a run) or\n"
-                                     "                          a fraction P of the frames, kinds drawn at random"},
+       {"--faults", "SPEC", "faults to inject: a plan file (FRAME KIND per line; see faults.csv of a run), random:P (a\n"
+                            "                          fraction P of the frames, the harness's kinds drawn at random) or\n"
+                            "                          cycle:N:KIND,KIND,... (one every N frames, the kinds in turn; the rig's\n"
+                            "                          kinds, e.g. board-kill, need a DUT with a rig: virtual-board)"},
        {"--frames", "N", "the first N frames only"},
        {"--seed", "S", "the random fault plan's and each fault's bytes and bits (default 1)"},
+       {"--soak", "N", "play the sequence N times over (frame k is frame k mod its length): soak.csv samples the\n"
+                       "                          host's and the DUT's resident memory and the latency every --soak-window frames"},
+       {"--soak-window", "F", "with --soak: frames per sample (default 1000)"},
        {"--plain", "", "inprocess: the thesis's loop instead of the session defaults"},
        {"--link", "loopback|udp", "inprocess: the link (default loopback; udp: two sockets on 127.0.0.1)"},
        {"--slots", "N", "inprocess: frames the DUT queues, 1..8 (default 4)"},
@@ -84,6 +96,8 @@ int hil(const std::vector<std::string>& argv) {
                           "                          -1: no -icount, guest time then follows the host's)"},
        {"--verilator-dut", "PATH", "verilator: the DUT program (default: gabarit-hil-verilator beside gabarit)"},
        {"--clock-mhz", "F", "verilator: the voter's clock for times (default 48: the UP5K's lowest Fmax over seeds)"},
+       {"--virtual-board", "DIR", "virtual-board: the aarch64 build (default: build/aarch64 beside this build), with\n"
+                                  "                          gabarit-board, gabarit-hil-relay and virtual-board/cache (prepare.sh)"},
        {"--timeout", "MS", "declare the DUT hung after this long without an answer to a PING (default per DUT)"}});
   if (!args.parse(rest)) return 0;
   const std::string kind = args.get("--dut");
@@ -104,6 +118,7 @@ int hil(const std::vector<std::string>& argv) {
   dut_only("--icount", "cortex-m");
   dut_only("--verilator-dut", "verilator");
   dut_only("--clock-mhz", "verilator");
+  dut_only("--virtual-board", "virtual-board");
 
   hil::RunConfig config;
   config.sequence_dir = sequence;
@@ -114,11 +129,20 @@ int hil(const std::vector<std::string>& argv) {
   }
   config.rate_fps = args.number("--rate", 0, 0.001, 100000);
   config.seed = static_cast<std::uint64_t>(args.integer("--seed", 1, 0, INT64_MAX));
-  const std::uint32_t available = count_frames(frames_path);
+  const SequenceShape shape = sequence_shape(frames_path);
+  const std::uint32_t available = shape.frames;
   config.max_frames = static_cast<std::uint32_t>(args.integer("--frames", available, 1, 0xFFFFFFFEll));
   if (config.max_frames > available) config.max_frames = available;
   if (config.max_frames == 0) throw app::Error(frames_path + ": no frames");
-  if (args.has("--faults")) config.faults = hil::parse_fault_plan(args.get("--faults"), config.max_frames, config.seed);
+  config.loops = static_cast<std::uint32_t>(args.integer("--soak", 1, 1, 1000000));
+  config.soak_window = static_cast<std::uint32_t>(args.integer("--soak-window", 1000, 10, 100000000));
+  if (args.has("--soak-window") && !args.has("--soak")) throw app::UsageError("--soak-window needs --soak");
+  if (std::uint64_t{config.max_frames} * config.loops > 0xFFFFFFFEull) throw app::UsageError("--soak: too many frames in all");
+  const std::uint32_t total_frames = config.max_frames * config.loops;
+  if (args.has("--faults")) config.faults = hil::parse_fault_plan(args.get("--faults"), total_frames, config.seed);
+  for (const hil::PlannedFault& f : config.faults.faults)
+    if (hil::is_rig_fault(f.kind) && kind != "virtual-board" && kind.rfind("board:", 0) != 0)
+      throw app::UsageError(std::string("--faults: ") + hil::fault_name(f.kind) + " is a rig's fault: --dut virtual-board injects it");
 
   std::unique_ptr<hil::DutDriver> dut;
   const std::chrono::milliseconds timeout(args.integer("--timeout", 0, 1, 3600000));
@@ -149,8 +173,21 @@ int hil(const std::vector<std::string>& argv) {
     o.table_path = table;
     o.log_path = (std::filesystem::path(report) / "dut.log").string();
     dut = hil::make_qemu_dut(o);
+  } else if (kind == "virtual-board") {
+    hil::VirtualBoardOptions o;
+    const std::string build = args.get_or("--virtual-board", beside_this_program("../../aarch64"));
+    o.cache = build + "/virtual-board/cache";
+    o.board = build + "/platform/linux/gabarit-board";
+    o.relay = build + "/platform/linux/gabarit-hil-relay";
+    o.scripts = GABARIT_VIRTUAL_BOARD_SCRIPTS;
+    o.table_path = table;
+    o.window = std::to_string(shape.width) + "x" + std::to_string(shape.height);
+    if (shape.width > 720 || shape.height > 480)
+      throw app::UsageError(frames_path + ": " + o.window + " frames; the virtual board's camera (vivid, S-Video) is 720x480");
+    o.log_path = (std::filesystem::path(report) / "dut.log").string();
+    dut = hil::make_virtual_board_dut(o);
   } else {
-    throw app::UsageError("--dut '" + kind + "': want inprocess, verilator or cortex-m");
+    throw app::UsageError("--dut '" + kind + "': want inprocess, verilator, cortex-m or virtual-board");
   }
   if (timeout.count() != 0 && kind != "verilator") dut->set_hang_timeout(timeout);
 
@@ -168,6 +205,15 @@ int hil(const std::vector<std::string>& argv) {
   };
   std::vector<host::PoseSample> truth;
   if (const auto gt = std::filesystem::path(sequence) / "gt.csv"; std::filesystem::exists(gt)) truth = host::read_pose_csv(gt.string());
+  if (config.loops > 1) {  // a soak's loop L shows frame k as frame L * length + k
+    const std::vector<host::PoseSample> once = truth;
+    for (std::uint32_t loop = 1; loop < config.loops; ++loop)
+      for (host::PoseSample t : once)
+        if (t.frame < config.max_frames) {
+          t.frame += loop * config.max_frames;
+          truth.push_back(t);
+        }
+  }
   const hil::RunResult result = hil::run_hil(config, *dut);
   jsonl.commit();
   hil::write_report(report, config, result, truth);

@@ -13,14 +13,15 @@ packages=(
   python3-skimage netpbm  # the real photograph behind the 'watch' shape, converted at run time
   verilator zlib1g-dev    # hardware voter co-simulation (FST waveforms need zlib)
   libgpiod-dev            # the board application's GPIO lines (libgpiod 1.6, the v1 API)
+  libusb-1.0-0-dev        # the HIL link's USB host side (harness, the virtual board's relay)
   linux-kbuild-6.1 cpio xz-utils  # the virtual board: gpio-sim built against the arm64 headers, its initramfs
   yosys nextpnr-ice40 fpga-icestorm  # hardware voter synthesis and place-and-route
   z3                      # the SMT solver behind yosys-smtbmc (formal proof of the FIFO)
   clang-14 libfuzzer-14-dev libclang-rt-14-dev  # the fuzz preset: libFuzzer targets, clang's UBSan (float-cast-overflow)
 )
-# The board application's libgpiod for the cross targets, from Debian's
-# multi-arch packages.
-cross_packages=(libgpiod-dev:arm64 libgpiod-dev:armhf)
+# The board application's libgpiod for the cross targets, and the arm64
+# relay's libusb, from Debian's multi-arch packages.
+cross_packages=(libgpiod-dev:arm64 libgpiod-dev:armhf libusb-1.0-0-dev:arm64)
 missing=()
 for p in "${packages[@]}" "${cross_packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -149,13 +149,41 @@ void DutEndpoint::on_message(std::span<const std::byte> message, std::uint64_t n
       bye_ = true;
       return;
     }
+    case MessageType::kInject: {
+      Inject inject;
+      if (decode(payload, inject) != Status::kOk) {
+        ++stats_.bad_message;
+        return;
+      }
+      inject_ = inject;
+      inject_pending_ = true;
+      return;
+    }
     case MessageType::kCaps:
     case MessageType::kPose:
     case MessageType::kEvent:
     case MessageType::kPong:
+    case MessageType::kInjected:
       break;  // the device's own messages: not for it
   }
   ++stats_.unknown_type;
+}
+
+bool DutEndpoint::take_inject(Inject& inject) noexcept {
+  if (!inject_pending_) return false;
+  inject = inject_;
+  inject_pending_ = false;
+  return true;
+}
+
+void DutEndpoint::report_injected(const Injected& answer) noexcept {
+  std::byte out[kInjectedBytes];
+  send(MessageType::kInjected, std::span<const std::byte>(out, encode(answer, out)));
+}
+
+void DutEndpoint::report_event(EventKind kind, EventReason reason, std::uint32_t detail, std::uint64_t now) noexcept {
+  now_ = now;
+  send_event(kind, reason, kNoFrame, detail);
 }
 
 void DutEndpoint::on_hello(std::span<const std::byte> payload) noexcept {

@@ -112,6 +112,8 @@ const char* message_type_name(MessageType type) noexcept {
     case MessageType::kPong: return "pong";
     case MessageType::kStats: return "stats";
     case MessageType::kBye: return "bye";
+    case MessageType::kInject: return "inject";
+    case MessageType::kInjected: return "injected";
   }
   return "unknown";
 }
@@ -150,6 +152,23 @@ const char* event_reason_name(EventReason reason) noexcept {
     case EventReason::kHardware: return "hardware-mismatch";
     case EventReason::kBoot: return "boot";
     case EventReason::kRepeat: return "repeat";
+    case EventReason::kCameraTimeout: return "camera-timeout";
+    case EventReason::kSameAsPrevious: return "same-as-previous-frame";
+    case EventReason::kCameraError: return "camera-error-buffer";
+    case EventReason::kCameraGap: return "camera-sequence-gap";
+    case EventReason::kCameraLost: return "camera-lost";
+    case EventReason::kCameraBack: return "camera-reopened";
+    case EventReason::kSequenceWrap: return "camera-sequence-wrap";
+  }
+  return "unknown";
+}
+
+const char* inject_outcome_name(InjectOutcome outcome) noexcept {
+  switch (outcome) {
+    case InjectOutcome::kDetected: return "detected";
+    case InjectOutcome::kUnsupported: return "unsupported";
+    case InjectOutcome::kFailed: return "failed";
+    case InjectOutcome::kUndetected: return "undetected";
   }
   return "unknown";
 }
@@ -314,6 +333,8 @@ std::size_t encode(const PoseReport& m, std::span<std::byte> out) noexcept {
   w.u64(m.done);
   w.u64(m.cycles);
   w.u16(0);
+  w.u64(m.captured);
+  w.u64(m.strobed);
   return w.done();
 }
 
@@ -336,6 +357,11 @@ Status decode(std::span<const std::byte> payload, PoseReport& m) noexcept {
   m.cycles = r.u64();
   (void)r.u16();
   GABARIT_TRY(r.status());
+  m.captured = m.strobed = 0;
+  if (payload.size() >= kPoseBytes) {  // 1.1's stages
+    m.captured = r.u64();
+    m.strobed = r.u64();
+  }
   if (m.state > 2 || m.frame_id == kNoFrame) return Status::kBadHeaderField;
   return Status::kOk;
 }
@@ -360,7 +386,7 @@ Status decode(std::span<const std::byte> payload, Event& m) noexcept {
   m.detail = r.u32();
   m.time = r.u64();
   GABARIT_TRY(r.status());
-  if (kind < 1 || kind > 5 || reason > 9) return Status::kBadHeaderField;
+  if (kind < 1 || kind > 5 || reason > kLastEventReason) return Status::kBadHeaderField;
   m.kind = static_cast<EventKind>(kind);
   m.reason = static_cast<EventReason>(reason);
   return Status::kOk;
@@ -405,7 +431,8 @@ Status decode(std::span<const std::byte> payload, Pong& m) noexcept {
 std::size_t encode(const Stats& m, std::span<std::byte> out) noexcept {
   Writer w(out);
   for (const std::uint32_t v : {m.messages_in, m.bad_crc, m.bad_message, m.unknown_type, m.framing_errors, m.sequence_gaps,
-                                m.stale, m.frames_taken, m.frames_tracked, m.frames_dropped, m.frames_skipped, m.messages_out})
+                                m.stale, m.frames_taken, m.frames_tracked, m.frames_dropped, m.frames_skipped, m.messages_out,
+                                m.resident_kib})
     w.u32(v);
   return w.done();
 }
@@ -415,7 +442,9 @@ Status decode(std::span<const std::byte> payload, Stats& m) noexcept {
   for (std::uint32_t* v : {&m.messages_in, &m.bad_crc, &m.bad_message, &m.unknown_type, &m.framing_errors, &m.sequence_gaps,
                            &m.stale, &m.frames_taken, &m.frames_tracked, &m.frames_dropped, &m.frames_skipped, &m.messages_out})
     *v = r.u32();
-  return r.status();
+  GABARIT_TRY(r.status());
+  m.resident_kib = payload.size() >= kStatsBytes ? r.u32() : 0;  // 1.1
+  return Status::kOk;
 }
 
 std::size_t encode(const Bye& m, std::span<std::byte> out) noexcept {
@@ -430,6 +459,50 @@ Status decode(std::span<const std::byte> payload, Bye& m) noexcept {
   m.reason = r.u32();
   m.last_frame = r.u32();
   return r.status();
+}
+
+
+std::size_t encode(const Inject& m, std::span<std::byte> out) noexcept {
+  Writer w(out);
+  w.u32(m.token);
+  w.u8(m.kind);
+  w.u8(0);
+  w.u16(0);
+  return w.done();
+}
+
+Status decode(std::span<const std::byte> payload, Inject& m) noexcept {
+  Reader r(payload);
+  m.token = r.u32();
+  m.kind = r.u8();
+  return r.status();
+}
+
+std::size_t encode(const Injected& m, std::span<std::byte> out) noexcept {
+  Writer w(out);
+  w.u32(m.token);
+  w.u8(m.kind);
+  w.u8(static_cast<std::uint8_t>(m.outcome));
+  w.u16(m.attempts);
+  w.u64(m.started);
+  w.u64(m.ended);
+  for (const char c : m.evidence) w.u8(static_cast<std::uint8_t>(c));
+  return w.done();
+}
+
+Status decode(std::span<const std::byte> payload, Injected& m) noexcept {
+  Reader r(payload);
+  m.token = r.u32();
+  m.kind = r.u8();
+  const std::uint8_t outcome = r.u8();
+  m.attempts = r.u16();
+  m.started = r.u64();
+  m.ended = r.u64();
+  r.text(m.evidence);
+  GABARIT_TRY(r.status());
+  if (outcome > 3) return Status::kBadHeaderField;
+  m.outcome = static_cast<InjectOutcome>(outcome);
+  return Status::kOk;
 }
 
 }  // namespace gabarit::link

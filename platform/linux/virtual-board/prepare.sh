@@ -3,8 +3,10 @@
 #   CACHE/vmlinuz           Debian's current arm64 kernel (linux-image-arm64's dependency,
 #                           looked up, never hard-coded: old versions leave the archive)
 #   CACHE/busybox           busybox-static for arm64
-#   CACHE/modules/*.ko      vivid and its dependencies, configfs, and gpio-sim + irq_sim
-#                           built out of tree (Debian's kernel builds neither)
+#   CACHE/modules/*.ko      vivid and its dependencies, configfs, the USB gadget side
+#                           (dummy_hcd, libcomposite, usb_f_fs), virtio_mmio and virtio_console (the HIL
+#                           relay's serial port), and gpio-sim + irq_sim built out of tree
+#                           (Debian's kernel builds neither)
 #   CACHE/modules/order     insmod order, dependencies first
 # Needs: apt-get, dpkg-deb, g++-aarch64-linux-gnu, linux-kbuild-6.1 (host tools
 # for the arm64 headers), python3. Re-running with a complete cache does nothing.
@@ -16,7 +18,9 @@ opts=(-oAPT::Architecture=arm64 -oAPT::Architectures=arm64 -oDir::State::Lists="
       -oDir::Cache="$apt_dir/cache" -oDir::State::Status=/dev/null -oDebug::NoLocking=1)
 mkdir -p "$apt_dir/lists/partial" "$apt_dir/cache/archives/partial" "$apt_dir/debs"
 
-if [ -f "$cache/modules/order" ] && [ -f "$cache/vmlinuz" ] && [ -f "$cache/busybox" ]; then
+wanted_modules="vivid configfs gpio-sim dummy_hcd libcomposite usb_f_fs virtio_mmio virtio_console"
+if [ -f "$cache/modules/order" ] && [ -f "$cache/vmlinuz" ] && [ -f "$cache/busybox" ] &&
+   [ "$(cat "$cache/modules/wanted" 2>/dev/null)" = "$wanted_modules" ]; then
   echo "virtual board: cache $cache is complete ($(cat "$cache/kernel-version"))"
   exit 0
 fi
@@ -70,9 +74,10 @@ make -s -C "$headers" M="$build" ARCH=arm64 CROSS_COMPILE=aarch64-linux-gnu- mod
 [ -f "$build/gpio-sim.ko" ] && [ -f "$build/irq_sim.ko" ] || { echo "virtual board: building gpio-sim failed" >&2; exit 1; }
 
 rm -rf "$cache/modules" && mkdir -p "$cache/modules"
-python3 "$here/module_order.py" "$root/lib/modules/$version" "$build" -- vivid configfs gpio-sim > "$cache/modules/paths"
+python3 "$here/module_order.py" "$root/lib/modules/$version" "$build" -- $wanted_modules > "$cache/modules/paths"
 while read -r ko; do cp "$ko" "$cache/modules/"; done < "$cache/modules/paths"
 sed 's|.*/||' "$cache/modules/paths" > "$cache/modules/order" && rm "$cache/modules/paths"
+echo "$wanted_modules" > "$cache/modules/wanted"
 cp "$root/boot/vmlinuz-$version" "$cache/vmlinuz"
 cp "$root/bin/busybox" "$cache/busybox"
 echo "$version" > "$cache/kernel-version"

@@ -76,6 +76,23 @@ class DutEndpoint {
   const Hello* pending_hello() const noexcept { return hello_pending_ ? &hello_ : nullptr; }
   void answer_hello(Refusal refusal) noexcept;
 
+  // An INJECT waiting for the application's answer (null: none): a DUT whose
+  // rig can inject faults on its side (the virtual board's relay) does it and
+  // answers INJECTED; deliver() answers unsupported for any other.
+  // The rig may answer later (a fault that ends on its own time) and may
+  // take another INJECT meanwhile: take_inject() hands the request over,
+  // report_injected() queues its answer (the caller's token and kind).
+  const Inject* pending_inject() const noexcept { return inject_pending_ ? &inject_ : nullptr; }
+  bool take_inject(Inject& inject) noexcept;
+  void report_injected(const Injected& answer) noexcept;
+  // A DUT event with no frame (kNoFrame): a rig's DUT restarted behind it
+  // (kRestart, kBoot), which the host answers with a new HELLO.
+  void report_event(EventKind kind, EventReason reason, std::uint32_t detail, std::uint64_t now) noexcept;
+  // The tracker mode CAPS reports, where the rig learns it from its DUT.
+  void set_mode(std::uint32_t mode) noexcept { caps_.mode = mode; }
+  // STATS.resident_kib, where the DUT knows it.
+  void set_resident_kib(std::uint32_t kib) noexcept { stats_.resident_kib = kib; }
+
   // The oldest queued message to send (empty: none), and its removal. The
   // outbox holds kOutboxMessages; a call queues at most two, so emptying it
   // after every call never loses one (STATS.messages_out counts what was
@@ -130,6 +147,8 @@ class DutEndpoint {
   Stats stats_;
   Hello hello_;
   bool hello_pending_ = false;
+  Inject inject_;
+  bool inject_pending_ = false;
   std::byte outbox_[kOutboxMessages][message_bytes(kMinPayload)] = {};
   std::uint16_t outbox_size_[kOutboxMessages] = {};
   std::uint32_t outbox_head_ = 0, outbox_count_ = 0;
@@ -149,6 +168,14 @@ template <class Application, class Output>
 void deliver(DutEndpoint& endpoint, std::span<const std::byte> message, Application& app, Output& out) noexcept {
   endpoint.on_message(message, app.now());
   if (const Hello* hello = endpoint.pending_hello()) endpoint.answer_hello(app.start(*hello));
+  if (Inject inject; endpoint.take_inject(inject)) {
+    Injected answer;
+    answer.outcome = InjectOutcome::kUnsupported;
+    if constexpr (requires { app.inject(inject); }) answer = app.inject(inject);
+    answer.token = inject.token;
+    answer.kind = inject.kind;
+    endpoint.report_injected(answer);
+  }
   flush(endpoint, out);
 }
 

@@ -47,6 +47,8 @@ enum class MessageType : std::uint8_t {
   kPong = 7,   // DUT -> host: the answer, with the DUT's view of the run
   kStats = 8,  // host -> DUT (empty: a request); DUT -> host: the counters
   kBye = 9,    // host -> DUT: end of run; DUT -> host: the acknowledgement
+  kInject = 10,    // host -> DUT: inject a fault on the DUT's side (a test rig's DUT: the virtual board)
+  kInjected = 11,  // DUT -> host: that fault's outcome and evidence
 };
 const char* message_type_name(MessageType type) noexcept;  // "hello", ..., "unknown"
 
@@ -155,9 +157,14 @@ struct PoseReport {
   std::uint64_t received = 0;       // DUT clock: the frame's last fragment in
   std::uint64_t done = 0;           // DUT clock: the pose ready
   std::uint64_t cycles = 0;         // the voter's clock cycles, where known (0: not)
+  // Appended in 1.1 (a 76-byte POSE decodes with both 0): a camera DUT's
+  // stages on the same clock as received and done, 0 where not known.
+  std::uint64_t captured = 0;       // DUT clock: the camera's timestamp of the frame tracked
+  std::uint64_t strobed = 0;        // DUT clock: the strobe line's rising edge for this pose
 };
 inline constexpr std::uint8_t kPoseReacquired = 1u << 0;
-inline constexpr std::size_t kPoseBytes = 76;
+inline constexpr std::size_t kPoseBytes = 92;
+inline constexpr std::size_t kPoseBytesV10 = 76;  // the shortest POSE accepted
 
 enum class EventKind : std::uint8_t { kDropped = 1, kSkipped = 2, kError = 3, kRestart = 4, kDuplicate = 5 };
 enum class EventReason : std::uint8_t {
@@ -171,7 +178,16 @@ enum class EventReason : std::uint8_t {
   kHardware = 7,     // error: the hardware's result disagrees with the kernel's on its counters
   kBoot = 8,         // restart: the DUT (re)started
   kRepeat = 9,       // duplicate: a frame already taken came again (no fate: informational)
+  // A camera DUT (the Linux board behind V4L2; detail: the driver's sequence number or count):
+  kCameraTimeout = 10,  // error: the camera path did not deliver the frame in time
+  kSameAsPrevious = 11, // skipped: identical to the previous frame, which a camera cannot tell apart
+  kCameraError = 12,    // error (informational, frame kNoFrame): a buffer the driver flagged V4L2_BUF_FLAG_ERROR
+  kCameraGap = 13,      // dropped (informational): the driver's sequence skipped `detail` frames
+  kCameraLost = 14,     // error (informational): the capture device went away
+  kCameraBack = 15,     // restart (informational): the capture device is open again
+  kSequenceWrap = 16,   // restart (informational): the driver's sequence number went back (wrapped)
 };
+inline constexpr std::uint8_t kLastEventReason = 16;
 const char* event_kind_name(EventKind kind) noexcept;
 const char* event_reason_name(EventReason reason) noexcept;
 
@@ -208,14 +224,42 @@ struct Stats {
   std::uint32_t stale = 0;            // messages not after the last accepted
   std::uint32_t frames_taken = 0, frames_tracked = 0, frames_dropped = 0, frames_skipped = 0;
   std::uint32_t messages_out = 0;
+  // Appended in 1.1 (0 when absent or not known): the DUT program's resident
+  // memory, for soaks.
+  std::uint32_t resident_kib = 0;
 };
-inline constexpr std::size_t kStatsBytes = 48;
+inline constexpr std::size_t kStatsBytes = 52;
 
 struct Bye {
   std::uint32_t reason = 0;       // 0: the run is complete
   std::uint32_t last_frame = kNoFrame;  // host: the last frame sent; DUT: the last taken
 };
 inline constexpr std::size_t kByeBytes = 8;
+
+// INJECT: a fault the DUT's rig injects on its side of the link (a camera
+// error, a USB unplug, a killed process, ...). `kind` is the rig's fault
+// number (hil/faults.hpp: FaultKind); an unknown one is answered unsupported.
+struct Inject {
+  std::uint32_t token = 0;
+  std::uint8_t kind = 0;
+};
+inline constexpr std::size_t kInjectBytes = 8;
+
+enum class InjectOutcome : std::uint8_t { kDetected = 0, kUnsupported = 1, kFailed = 2, kUndetected = 3 };
+const char* inject_outcome_name(InjectOutcome outcome) noexcept;
+
+// INJECTED: the fault is over (its effect detected by the DUT's own
+// checks, or not), with what showed it.
+struct Injected {
+  std::uint32_t token = 0;
+  std::uint8_t kind = 0;
+  InjectOutcome outcome = InjectOutcome::kFailed;
+  std::uint16_t attempts = 0;   // injections needed (vivid loses some error injections)
+  std::uint64_t started = 0;    // DUT clock
+  std::uint64_t ended = 0;      // DUT clock: the fault over (the device back, the halt cleared, ...)
+  char evidence[80] = {};       // what detected it, NUL-padded
+};
+inline constexpr std::size_t kInjectedBytes = 24 + 80;
 
 std::size_t encode(const Hello& m, std::span<std::byte> out) noexcept;
 std::size_t encode(const Caps& m, std::span<std::byte> out) noexcept;
@@ -226,6 +270,8 @@ std::size_t encode(const Ping& m, std::span<std::byte> out) noexcept;
 std::size_t encode(const Pong& m, std::span<std::byte> out) noexcept;
 std::size_t encode(const Stats& m, std::span<std::byte> out) noexcept;
 std::size_t encode(const Bye& m, std::span<std::byte> out) noexcept;
+std::size_t encode(const Inject& m, std::span<std::byte> out) noexcept;
+std::size_t encode(const Injected& m, std::span<std::byte> out) noexcept;
 
 Status decode(std::span<const std::byte> payload, Hello& m) noexcept;
 Status decode(std::span<const std::byte> payload, Caps& m) noexcept;
@@ -236,6 +282,8 @@ Status decode(std::span<const std::byte> payload, Ping& m) noexcept;
 Status decode(std::span<const std::byte> payload, Pong& m) noexcept;
 Status decode(std::span<const std::byte> payload, Stats& m) noexcept;
 Status decode(std::span<const std::byte> payload, Bye& m) noexcept;
+Status decode(std::span<const std::byte> payload, Inject& m) noexcept;
+Status decode(std::span<const std::byte> payload, Injected& m) noexcept;
 
 // Copies a NUL-terminated string into a fixed field, truncating, NUL-padding.
 template <std::size_t N>

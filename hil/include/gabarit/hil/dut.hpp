@@ -67,6 +67,23 @@ struct QemuOptions {
 // gabarit_table_slot and gabarit_table_slot_end symbols.
 std::unique_ptr<DutDriver> make_qemu_dut(const QemuOptions& options);
 
+struct VirtualBoardOptions {
+  std::string qemu = "qemu-system-aarch64";
+  std::string cache;       // prepare.sh's: the kernel, busybox, the modules
+  std::string scripts;     // platform/linux/virtual-board (hil-initramfs.sh, hil-init.sh)
+  std::string board;       // the aarch64 gabarit-board
+  std::string relay;       // the aarch64 gabarit-hil-relay
+  std::string table_path;
+  std::string window;      // WxH: the sequence's frame size (the board tracks that corner of vivid's frame)
+  std::string serial = "gabarit-vb-0001";  // the gadget's USB serial number
+  std::string log_path;    // the guest's console
+};
+// The virtual board: the board application on Debian's arm64 kernel in
+// qemu-system-aarch64, frames through vivid (V4L2), poses over a USB
+// FunctionFS gadget (dummy_hcd), both bridged to the harness by a relay in
+// the guest on a virtio-serial port (platform/linux/virtual-board/README.md).
+std::unique_ptr<DutDriver> make_virtual_board_dut(const VirtualBoardOptions& options);
+
 // The address and size of an ELF32 symbol (the firmware's table slot).
 struct ElfSymbol {
   std::uint32_t address = 0, size = 0;

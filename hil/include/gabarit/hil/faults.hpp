@@ -17,9 +17,24 @@
 
 namespace gabarit::hil {
 
-enum class FaultKind : std::uint8_t { kDrop, kDuplicate, kReorder, kCorrupt, kBitflip, kRestart };
+enum class FaultKind : std::uint8_t {
+  kDrop, kDuplicate, kReorder, kCorrupt, kBitflip, kRestart,
+  // The rig's (link::RigFault, in the same order).
+  kCameraError, kCameraDrop, kSequenceWrap, kCameraDisconnect, kModuleReload,
+  kUsbStall, kUsbUnplug, kUsbTimeout, kBoardKill, kUsbCorrupt,
+};
+// The harness's own kinds: what random:P draws from.
 inline constexpr FaultKind kAllFaultKinds[] = {FaultKind::kDrop,    FaultKind::kDuplicate, FaultKind::kReorder,
                                                FaultKind::kCorrupt, FaultKind::kBitflip,   FaultKind::kRestart};
+inline constexpr FaultKind kRigFaultKinds[] = {
+    FaultKind::kCameraError, FaultKind::kCameraDrop, FaultKind::kSequenceWrap, FaultKind::kCameraDisconnect,
+    FaultKind::kModuleReload, FaultKind::kUsbStall, FaultKind::kUsbUnplug, FaultKind::kUsbTimeout,
+    FaultKind::kBoardKill, FaultKind::kUsbCorrupt};
+constexpr bool is_rig_fault(FaultKind kind) { return kind >= FaultKind::kCameraError; }
+// INJECT's kind for a rig fault (link::RigFault's value).
+constexpr std::uint8_t rig_fault_number(FaultKind kind) {
+  return static_cast<std::uint8_t>(static_cast<std::uint8_t>(kind) - static_cast<std::uint8_t>(FaultKind::kCameraError) + 1);
+}
 const char* fault_name(FaultKind kind);
 FaultKind parse_fault_kind(const std::string& text, const std::string& where);  // throws app::Error
 
@@ -35,9 +50,12 @@ struct FaultPlan {
   const PlannedFault* at(std::uint32_t frame) const;
 };
 
-// "FILE" or "random:P" (0 <= P <= 1, per frame, kinds drawn uniformly) for
-// `frames` frames; `seed` draws the random plan and each fault's bytes and bits.
+// "FILE", "random:P" (0 <= P <= 1, per frame, the harness's kinds drawn
+// uniformly) or "cycle:N:KIND,KIND,..." (one fault every N frames from frame
+// N, the kinds in turn: every kind equally often) for `frames` frames;
+// `seed` draws the random plan and each fault's bytes and bits.
 FaultPlan parse_fault_plan(const std::string& spec, std::uint32_t frames, std::uint64_t seed);
+FaultPlan cycle_fault_plan(std::uint32_t every, const std::vector<FaultKind>& kinds, std::uint32_t frames);
 FaultPlan read_fault_file(const std::string& path, std::uint32_t frames);
 FaultPlan random_fault_plan(double probability, std::uint32_t frames, std::uint64_t seed);
 std::string fault_file_text(const FaultPlan& plan);  // the file format above

@@ -40,6 +40,9 @@ struct FrameRecord {
   double sent_us = -1;            // since the run began (first byte handed to the transport)
   double latency_us = -1;         // sent -> POSE received
   double dut_us = -1;             // the DUT's own time for it, received -> done (its clock)
+  // A camera DUT's stages on its clock (-1: not reported): the frame shown
+  // to the camera -> captured -> pose ready -> strobe edge.
+  double camera_us = -1, track_us = -1, strobe_us = -1;
   int reference = -1;             // 1: bit-identical to the host's reference, 0: not, -1: no pose
   std::string mismatch;           // the first field that differs
   bool frame_crc_ok = true;       // the pixels the DUT tracked are the ones sent
@@ -56,6 +59,20 @@ struct InjectedFault {
   bool detected = false;   // the frame's fate shows it
   bool recovered = false;  // the next unfaulted frame came back as a pose matching the reference
   std::string evidence;
+  // Rig faults: when the rig said the fault was over (since the run began),
+  // and how long after that the next matching pose arrived.
+  double ended_us = -1;
+  double recovery_ms = -1;
+  bool answered = false;   // INJECTED came back
+};
+
+// A soak's window of frames: memory and latency over the run.
+struct SoakSample {
+  std::uint32_t frames = 0;      // frames sent so far
+  double seconds = 0;            // since the run began
+  std::uint64_t host_rss_kib = 0;
+  std::uint32_t dut_rss_kib = 0; // 0: the DUT does not report it
+  double latency_p50_us = 0, latency_p99_us = 0;  // over the window's poses
 };
 
 struct RunConfig {
@@ -67,6 +84,11 @@ struct RunConfig {
   FaultPlan faults;
   std::uint64_t seed = 1;              // each fault's bytes and bits
   std::uint32_t max_unplanned_restarts = 10;
+  // Soak: the sequence played this many times over (frame k shows frame
+  // k mod the sequence's length), with a memory and latency sample every
+  // soak_window frames.
+  std::uint32_t loops = 1;
+  std::uint32_t soak_window = 1000;
   // Called about once a second and at the end: frames resolved, frames to send.
   std::function<void(std::uint32_t, std::uint32_t)> progress;
   // Called as each frame's fate becomes known (results.jsonl).
@@ -87,6 +109,8 @@ struct RunResult {
   std::vector<InjectedFault> faults;
   std::optional<link::Stats> dut_stats;  // the DUT's counters at the end (of its last run)
   std::uint32_t restarts_planned = 0, restarts_hung = 0, restarts_crashed = 0;
+  std::uint32_t restarts_reported = 0;   // the DUT's rig restarted the DUT behind it (EVENT restart/boot)
+  std::vector<SoakSample> soak;
   std::uint32_t out_of_order = 0;        // answers for a frame older than one already answered
   std::uint32_t double_answers = 0;      // a second fate for one frame
   std::uint32_t unknown_answers = 0;     // answers for frames never sent
