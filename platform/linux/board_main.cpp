@@ -492,6 +492,7 @@ class Board : private board::BoardLink::Handler {
   }
 
   void process(const board::CapturedFrame& frame) {
+    const std::uint64_t dequeued_us = monotonic_us();
     ImageView image;
     if (!frame_luma(frame, image)) return;
     const std::uint32_t crc32c_of_frame = c_.usb || c_.skip_repeats ? luma_crc32c(image) : 0;
@@ -516,8 +517,10 @@ class Board : private board::BoardLink::Handler {
       link::PoseReport report = link::session_report(result);
       report.frame_crc = crc32c_of_frame;
       // V4L2's timestamp is CLOCK_MONOTONIC (vivid, UVC, most drivers): the
-      // capture stage on the same clock as the pose.
-      report.received = report.captured = frame.timestamp_us;
+      // capture stage on the same clock as the pose. Some drivers stamp the
+      // frame's nominal end (vivid), later than it reached us: never later
+      // than the dequeue.
+      report.received = report.captured = std::min(frame.timestamp_us, dequeued_us);
       report.done = monotonic_us();
       link_.send_pose(report);
     }

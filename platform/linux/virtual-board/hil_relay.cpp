@@ -147,9 +147,11 @@ class LineSampler {
     std::lock_guard lock(mutex_);
     while (!edges_.empty() && edges_.front() + 1000 < t) edges_.pop_front();
   }
-  // Watches the lines for "high while down" between begin_down and end_down.
-  void begin_down() {
+  // Watches the lines for "high while down" between begin_down and end_down
+  // (samples read from `since`, when the program is gone, on).
+  void begin_down(std::uint64_t since) {
     high_while_down_ = false;
+    down_since_ = since;
     down_ = true;
   }
   bool end_down() {
@@ -167,9 +169,9 @@ class LineSampler {
   void loop() {
     int last = 0;
     while (!stop_) {
+      const std::uint64_t t = now_us();
       const int s = value(strobe_fd_);
       const int l = value(lock_fd_);
-      const std::uint64_t t = now_us();
       ++samples_;
       if (s == 1 && last == 0) {
         std::lock_guard lock(mutex_);
@@ -178,14 +180,14 @@ class LineSampler {
         ++edges_total_;
       }
       last = s;
-      if (down_ && (s | l) != 0) high_while_down_ = true;
+      if (down_ && t >= down_since_ && (s | l) != 0) high_while_down_ = true;
       std::this_thread::sleep_for(std::chrono::microseconds(250));
     }
   }
   int lock_fd_ = -1, strobe_fd_ = -1;
   std::thread thread_;
   std::atomic<bool> stop_{false}, down_{false}, high_while_down_{false};
-  std::atomic<std::uint64_t> samples_{0}, edges_total_{0};
+  std::atomic<std::uint64_t> samples_{0}, edges_total_{0}, down_since_{0};
   std::mutex mutex_;
   std::deque<std::uint64_t> edges_;
 };
@@ -234,6 +236,18 @@ class BoardProcess {
     pid_ = -1;
   }
   int last_status() const { return last_status_; }
+  // VmRSS of the running program, KiB (0: not running).
+  std::uint32_t resident_kib() const {
+    if (pid_ <= 0) return 0;
+    std::FILE* f = std::fopen(("/proc/" + std::to_string(pid_) + "/status").c_str(), "r");
+    if (f == nullptr) return 0;
+    char line[128];
+    unsigned long kib = 0;
+    while (std::fgets(line, sizeof line, f) != nullptr)
+      if (std::strncmp(line, "VmRSS:", 6) == 0) kib = std::strtoul(line + 6, nullptr, 10);
+    std::fclose(f);
+    return static_cast<std::uint32_t>(kib);
+  }
   std::uint32_t starts() const { return starts_; }
 
  private:
@@ -366,7 +380,7 @@ class Relay {
   // The board link's numbering.
   std::uint32_t seq_ = 1, peer_seq_ = 0;
   bool any_peer_ = false;
-  std::uint64_t last_ping_ = 0;
+  std::uint64_t last_ping_ = 0, last_rss_ = 0;
   std::uint32_t ping_token_ = 0;
   // What the board said.
   std::optional<link::Caps> board_caps_;
@@ -668,8 +682,8 @@ std::optional<link::Injected> Relay::inject(RigFault fault, const link::Inject& 
     }
     case RigFault::kBoardKill: {
       expecting_kill_ = true;
-      lines_.begin_down();
-      board_.kill_now(SIGKILL);
+      board_.kill_now(SIGKILL);  // reaped: its line requests are released
+      lines_.begin_down(now_us());
       usb_.close();
       pump_until([] { return false; }, 300);  // down for a while: the lines must sit at their safe level
       const bool safe = lines_.end_down();
@@ -830,6 +844,10 @@ int Relay::run() {
     keep_board_alive();
     reshow_current();
     check_wraps();
+    if (now_us() - last_rss_ > 1000000u) {  // STATS.resident_kib: the board program's memory, for soaks
+      last_rss_ = now_us();
+      endpoint_->set_resident_kib(board_.resident_kib());
+    }
     if (current_ && now_us() > current_->deadline) {
       current_.reset();
       endpoint_->report_failure(link::EventKind::kError, link::EventReason::kCameraTimeout, 0, now_us());
