@@ -5,6 +5,8 @@
 #include <signal.h>
 #include <sys/socket.h>
 #include <sys/un.h>
+#include <netdb.h>
+#include <termios.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -18,6 +20,7 @@
 #include "gabarit/app/files.hpp"
 #include "gabarit/app/session_dut.hpp"
 #include "gabarit/crc32.hpp"
+#include "gabarit/hil/board_map.hpp"
 
 namespace gabarit::hil {
 namespace {
@@ -408,6 +411,96 @@ class VirtualBoardDut final : public DutDriver {
   std::unique_ptr<Transport> transport_;
 };
 
+// ---- a real board's relay, on a serial device or TCP
+
+speed_t baud_constant(std::uint32_t baud) {
+  switch (baud) {
+    case 9600: return B9600;
+    case 19200: return B19200;
+    case 38400: return B38400;
+    case 57600: return B57600;
+    case 115200: return B115200;
+    case 230400: return B230400;
+    case 460800: return B460800;
+    case 921600: return B921600;
+    case 1000000: return B1000000;
+    case 2000000: return B2000000;
+    case 3000000: return B3000000;
+    case 4000000: return B4000000;
+    default: throw app::Error("baud " + std::to_string(baud) + ": not a standard rate");
+  }
+}
+
+class BoardDut final : public DutDriver {
+ public:
+  explicit BoardDut(BoardMap b) : board_(std::move(b)) {}
+  ~BoardDut() override { stop(); }
+  std::string kind() const override { return "board"; }
+  std::chrono::milliseconds default_hang_timeout() const override { return std::chrono::milliseconds(board_.hang_timeout_ms); }
+  std::chrono::milliseconds stall_interval() const override { return std::chrono::milliseconds(500); }
+  std::string description() const override {
+    return board_.name + " (" + board_.source + "): the relay on " + board_.relay + ", gadget " + board_.usb + ", camera " +
+           board_.camera + " by " + board_.frame_path;
+  }
+
+  void start() override {
+    stop();
+    const int fd = board_.relay.rfind("tcp:", 0) == 0 ? connect_tcp(board_.relay.substr(4)) : open_serial();
+    transport_ = std::make_unique<StreamTransport>(fd, fd, board_.name + " relay");
+  }
+  void stop() noexcept override { transport_.reset(); }
+  Transport& transport() override { return *transport_; }
+
+ private:
+  int open_serial() const {
+    const int fd = ::open(board_.relay.c_str(), O_RDWR | O_NOCTTY | O_CLOEXEC);
+    if (fd < 0) throw app::Error(board_.relay + ": " + std::strerror(errno));
+    termios t{};
+    if (::tcgetattr(fd, &t) == 0) {  // a pty or a pipe has no line settings: fine
+      ::cfmakeraw(&t);
+      const speed_t speed = baud_constant(board_.baud);
+      ::cfsetispeed(&t, speed);
+      ::cfsetospeed(&t, speed);
+      t.c_cflag |= CLOCAL | CREAD;
+      if (::tcsetattr(fd, TCSANOW, &t) != 0) {
+        const int e = errno;
+        ::close(fd);
+        throw app::Error(board_.relay + ": setting raw mode: " + std::strerror(e));
+      }
+    }
+    return fd;
+  }
+  int connect_tcp(const std::string& address) const {
+    const auto colon = address.rfind(':');
+    if (colon == std::string::npos) throw app::Error("relay tcp:" + address + ": want tcp:HOST:PORT");
+    addrinfo hints{};
+    hints.ai_socktype = SOCK_STREAM;
+    addrinfo* found = nullptr;
+    if (::getaddrinfo(address.substr(0, colon).c_str(), address.substr(colon + 1).c_str(), &hints, &found) != 0 || found == nullptr)
+      throw app::Error("relay tcp:" + address + ": cannot resolve it");
+    // The board may still be booting: try for up to 20 s.
+    const auto deadline = Clock::now() + std::chrono::seconds(20);
+    int fd = -1;
+    while (fd < 0) {
+      fd = ::socket(found->ai_family, found->ai_socktype | SOCK_CLOEXEC, found->ai_protocol);
+      if (fd >= 0 && ::connect(fd, found->ai_addr, found->ai_addrlen) != 0) {
+        ::close(fd);
+        fd = -1;
+      }
+      if (fd < 0 && Clock::now() > deadline) {
+        ::freeaddrinfo(found);
+        throw app::Error("relay tcp:" + address + ": no connection in 20 s");
+      }
+      if (fd < 0) ::usleep(200000);
+    }
+    ::freeaddrinfo(found);
+    return fd;
+  }
+
+  BoardMap board_;
+  std::unique_ptr<Transport> transport_;
+};
+
 template <class T>
 T read_le(const std::vector<unsigned char>& b, std::size_t at) {
   if (at + sizeof(T) > b.size()) throw app::Error("truncated ELF");
@@ -459,6 +552,8 @@ std::unique_ptr<DutDriver> make_process_dut(std::string kind, std::vector<std::s
 }
 
 std::unique_ptr<DutDriver> make_qemu_dut(const QemuOptions& options) { return std::make_unique<QemuDut>(options); }
+
+std::unique_ptr<DutDriver> make_board_dut(const BoardMap& board) { return std::make_unique<BoardDut>(board); }
 
 std::unique_ptr<DutDriver> make_virtual_board_dut(const VirtualBoardOptions& options) {
   return std::make_unique<VirtualBoardDut>(options);

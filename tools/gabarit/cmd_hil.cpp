@@ -10,6 +10,7 @@
 #include "gabarit/app/error.hpp"
 #include "gabarit/app/files.hpp"
 #include "gabarit/app/image_io.hpp"
+#include "gabarit/hil/board_map.hpp"
 #include "gabarit/hil/dut.hpp"
 #include "gabarit/hil/harness.hpp"
 #include "gabarit/hil/report.hpp"
@@ -60,7 +61,7 @@ int hil(const std::vector<std::string>& argv) {
   const std::vector<std::string> rest(argv.begin() + (argv[0] == "run" ? 1 : 0), argv.end());
   app::Args args(
       "hil run",
-      "--dut inprocess|verilator|cortex-m|virtual-board --sequence DIR --report DIR [--table T] [--init X,Y[,THETA[,DEPTH]]] [--rate FPS]\n"
+      "--dut inprocess|verilator|cortex-m|virtual-board|board:NAME --sequence DIR --report DIR [--table T] [--init X,Y[,THETA[,DEPTH]]] [--rate FPS]\n"
       "       [--faults FILE|random:P|cycle:N:KINDS] [--frames N] [--seed S] [--soak N]",
       "Replays a recorded sequence (DIR/frames.y4m, DIR/gt.csv if any) into a device under test over the HIL link\n"
       "(docs/hil-protocol.md), collects every pose, accounts for every frame (a pose, or why not), checks each pose\n"
@@ -71,8 +72,9 @@ int hil(const std::vector<std::string>& argv) {
       "voter, Verilated, in gabarit-hil-verilator: the thesis's loop with the voter in RTL), cortex-m (the HIL\n"
       "firmware in qemu-system-arm, the table loaded into its flash slot, its UART0 on a socket), virtual-board (the\n"
       "board application on Debian's arm64 kernel in qemu-system-aarch64: frames through vivid and V4L2, poses over a\n"
-      "USB FunctionFS gadget, GPIO through gpio-sim, bridged by a relay in the guest on a virtio-serial port).",
-      {{"--dut", "KIND", "inprocess, verilator, cortex-m or virtual-board", false, true},
+      "USB FunctionFS gadget, GPIO through gpio-sim, bridged by a relay in the guest on a virtio-serial port),\n"
+      "board:NAME (a real board running the same relay, from hil/boards/NAME.yaml or a .yaml path; docs/hil-boards.md).",
+      {{"--dut", "KIND", "inprocess, verilator, cortex-m, virtual-board or board:NAME", false, true},
        {"--sequence", "DIR", "folder with frames.y4m and, optionally, gt.csv (gabarit synth writes both)", false, true},
        {"--report", "DIR", "folder for the report (new, empty, or a previous report)", false, true},
        {"--table", "T", "the table (default DIR/table.gbt); the DUT must hold the same (HELLO carries its CRC)"},
@@ -142,7 +144,8 @@ int hil(const std::vector<std::string>& argv) {
   if (args.has("--faults")) config.faults = hil::parse_fault_plan(args.get("--faults"), total_frames, config.seed);
   for (const hil::PlannedFault& f : config.faults.faults)
     if (hil::is_rig_fault(f.kind) && kind != "virtual-board" && kind.rfind("board:", 0) != 0)
-      throw app::UsageError(std::string("--faults: ") + hil::fault_name(f.kind) + " is a rig's fault: --dut virtual-board injects it");
+      throw app::UsageError(std::string("--faults: ") + hil::fault_name(f.kind) +
+                            " is a rig's fault: --dut virtual-board or board:NAME injects it");
 
   std::unique_ptr<hil::DutDriver> dut;
   const std::chrono::milliseconds timeout(args.integer("--timeout", 0, 1, 3600000));
@@ -186,8 +189,10 @@ int hil(const std::vector<std::string>& argv) {
       throw app::UsageError(frames_path + ": " + o.window + " frames; the virtual board's camera (vivid, S-Video) is 720x480");
     o.log_path = (std::filesystem::path(report) / "dut.log").string();
     dut = hil::make_virtual_board_dut(o);
+  } else if (kind.rfind("board:", 0) == 0) {
+    dut = hil::make_board_dut(hil::load_board_map(kind.substr(6), GABARIT_BOARDS_DIR));
   } else {
-    throw app::UsageError("--dut '" + kind + "': want inprocess, verilator, cortex-m or virtual-board");
+    throw app::UsageError("--dut '" + kind + "': want inprocess, verilator, cortex-m, virtual-board or board:NAME");
   }
   if (timeout.count() != 0 && kind != "verilator") dut->set_hang_timeout(timeout);
 

@@ -108,6 +108,7 @@ struct Config {
   std::string gpio_dir;  // gpio-sim's sysfs folder of the chip (sim_gpioN inside)
   int lock_line = 0, strobe_line = 1;
   std::string board_log = "/tmp/board.log";
+  std::string kind = "virtual-board", board_name = "QEMU virt, Cortex-A72, vivid, USB";  // CAPS: what the harness reports
   std::string table;  // the board's table file: its CRC answers HELLO's check before the board does
   std::vector<std::string> board_argv;
 };
@@ -259,9 +260,18 @@ class BoardProcess {
 // ---- The harness's side: the virtio-serial port, COBS-framed.
 class HarnessPort {
  public:
+  // A serial line (a real board's UART or USB-serial gadget) goes raw; a
+  // virtio-serial port has no line settings.
   bool open(const std::string& path) {
-    fd_ = ::open(path.c_str(), O_RDWR | O_CLOEXEC | O_NONBLOCK);
-    return fd_ >= 0;
+    fd_ = ::open(path.c_str(), O_RDWR | O_CLOEXEC | O_NONBLOCK | O_NOCTTY);
+    if (fd_ < 0) return false;
+    termios t{};
+    if (::isatty(fd_) && ::tcgetattr(fd_, &t) == 0) {
+      ::cfmakeraw(&t);
+      t.c_cflag |= CLOCAL | CREAD;
+      if (::tcsetattr(fd_, TCSANOW, &t) != 0) return false;
+    }
+    return true;
   }
   int fd() const { return fd_; }
   // Reads what is there; each whole message to `on_message`.
@@ -828,8 +838,8 @@ int Relay::run() {
     caps.table_crc = crc32(bytes);
     caps.table_bytes = static_cast<std::uint32_t>(bytes.size());
   }
-  link::set_text(caps.kind, "virtual-board");
-  link::set_text(caps.board, "QEMU virt, Cortex-A72, vivid, USB");
+  link::set_text(caps.kind, c_.kind.c_str());
+  link::set_text(caps.board, c_.board_name.c_str());
   link::set_text(caps.firmware, "gabarit-board");
   frame_memory_.assign(link::dut_frame_memory_bytes(1, caps.max_frame_bytes), 0);
   endpoint_.emplace(caps, frame_memory_);
@@ -894,7 +904,8 @@ int main(int argc, char** argv) {
     if (a == "--help") {
       std::puts("usage: gabarit-hil-relay [--port DEV] [--capture DEV] [--output DEV] [--camera-link PATH] [--size WxH]\n"
                 "         [--vivid-module KO] [--gadget DIR] [--usb VID:PID[:SERIAL]] [--gpio-dir DIR] [--lock-line N]\n"
-                "         [--strobe-line N] [--board-log FILE] [--table T] -- BOARD_PROGRAM [ARGS...]\n"
+                "         [--strobe-line N] [--board-log FILE] [--table T]\n"
+                "         [--kind TEXT] [--name TEXT] -- BOARD_PROGRAM [ARGS...]\n"
                 "The virtual board's HIL rig (platform/linux/virtual-board/README.md).");
       return 0;
     }
@@ -909,6 +920,8 @@ int main(int argc, char** argv) {
     else if (a == "--strobe-line") c.strobe_line = std::atoi(value("--strobe-line").c_str());
     else if (a == "--board-log") c.board_log = value("--board-log");
     else if (a == "--table") c.table = value("--table");
+    else if (a == "--kind") c.kind = value("--kind");
+    else if (a == "--name") c.board_name = value("--name");
     else if (a == "--size") {
       const std::string s = value("--size");
       if (std::sscanf(s.c_str(), "%ux%u", &c.width, &c.height) != 2) return std::fprintf(stderr, "gabarit-hil-relay: --size WxH\n"), 2;

@@ -84,6 +84,12 @@ struct VirtualBoardOptions {
 // the guest on a virtio-serial port (platform/linux/virtual-board/README.md).
 std::unique_ptr<DutDriver> make_virtual_board_dut(const VirtualBoardOptions& options);
 
+// A real board (hil/boards/NAME.yaml, board_map.hpp) running the HIL relay
+// as the virtual board does: the harness reaches the relay on a serial
+// device or TCP. The board cannot be power-cycled from here: a restart
+// reconnects.
+std::unique_ptr<DutDriver> make_board_dut(const struct BoardMap& board);
+
 // The address and size of an ELF32 symbol (the firmware's table slot).
 struct ElfSymbol {
   std::uint32_t address = 0, size = 0;
