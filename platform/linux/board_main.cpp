@@ -430,12 +430,7 @@ class Board : private board::BoardLink::Handler {
           ++error_frames_;
           camera_event(link::EventKind::kError, link::EventReason::kCameraError, frame.sequence);
           count_delivered(frame.sequence);  // keeps the sequence: a flagged frame is not a dropped one
-          // The buffer goes back to the driver like any other.
-          if (!capture_.requeue(frame.index)) {
-            device_lost(capture_.error());
-            return;
-          }
-          continue;
+          continue;  // the capture gave its buffer back to the driver
         case CaptureEvent::kDeviceLost: device_lost(capture_.error()); return;
         case CaptureEvent::kFrame: break;
       }

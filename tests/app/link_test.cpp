@@ -212,6 +212,71 @@ TEST(Protocol, EveryMessageRoundTripsAndEachDecodeErrorHasItsCode) {
   EXPECT_EQ(encode(Stats{}, std::span(buf, kStatsBytes - 1)), 0u);  // a short buffer writes nothing
 }
 
+// 1.1's additions: INJECT and INJECTED, POSE's camera stages and STATS's
+// resident memory, appended so that a 1.0 peer's shorter messages decode.
+TEST(Protocol, RigFaultMessagesAndTheAppendedFieldsRoundTripAndOldLengthsDecode) {
+  std::byte buf[512];
+  const Inject in{77, 9};
+  Inject in2;
+  ASSERT_EQ(encode(in, buf), kInjectBytes);
+  ASSERT_EQ(decode(std::span(buf, kInjectBytes), in2), Status::kOk);
+  EXPECT_EQ(in2.token, 77u);
+  EXPECT_EQ(in2.kind, 9u);
+  EXPECT_EQ(decode(std::span(buf, 4), in2), Status::kTruncated);
+
+  Injected a;
+  a.token = 5;
+  a.kind = 3;
+  a.outcome = InjectOutcome::kDetected;
+  a.attempts = 2;
+  a.started = 1000;
+  a.ended = 2500;
+  set_text(a.evidence, "board: camera lost (1) and reopened (1)");
+  Injected a2;
+  ASSERT_EQ(encode(a, buf), kInjectedBytes);
+  ASSERT_EQ(decode(std::span(buf, kInjectedBytes), a2), Status::kOk);
+  EXPECT_EQ(a2.token, 5u);
+  EXPECT_EQ(a2.outcome, InjectOutcome::kDetected);
+  EXPECT_EQ(a2.attempts, 2u);
+  EXPECT_EQ(a2.ended, 2500u);
+  EXPECT_STREQ(a2.evidence, "board: camera lost (1) and reopened (1)");
+  buf[5] = std::byte{4};  // no such outcome
+  EXPECT_EQ(decode(std::span(buf, kInjectedBytes), a2), Status::kBadHeaderField);
+  EXPECT_STREQ(inject_outcome_name(InjectOutcome::kUndetected), "undetected");
+
+  PoseReport p;
+  p.frame_id = 3;
+  p.captured = 111;
+  p.strobed = 222;
+  PoseReport p2;
+  ASSERT_EQ(encode(p, buf), kPoseBytes);
+  ASSERT_EQ(decode(std::span(buf, kPoseBytes), p2), Status::kOk);
+  EXPECT_EQ(p2.captured, 111u);
+  EXPECT_EQ(p2.strobed, 222u);
+  ASSERT_EQ(decode(std::span(buf, kPoseBytesV10), p2), Status::kOk);  // a 1.0 POSE: no stages
+  EXPECT_EQ(p2.captured, 0u);
+  EXPECT_EQ(p2.strobed, 0u);
+
+  Stats st;
+  st.frames_tracked = 9;
+  st.resident_kib = 4321;
+  Stats st2;
+  ASSERT_EQ(encode(st, buf), kStatsBytes);
+  ASSERT_EQ(decode(std::span(buf, kStatsBytes), st2), Status::kOk);
+  EXPECT_EQ(st2.resident_kib, 4321u);
+  ASSERT_EQ(decode(std::span(buf, kStatsBytes - 4), st2), Status::kOk);  // 1.0's 48 bytes
+  EXPECT_EQ(st2.resident_kib, 0u);
+  EXPECT_EQ(st2.frames_tracked, 9u);
+
+  Event e{EventKind::kError, EventReason::kCameraLost, kNoFrame, 1, 0};
+  Event e2;
+  ASSERT_EQ(decode(std::span(buf, encode(e, buf)), e2), Status::kOk);
+  EXPECT_EQ(e2.reason, EventReason::kCameraLost);
+  EXPECT_STREQ(event_reason_name(EventReason::kSequenceWrap), "camera-sequence-wrap");
+  buf[1] = std::byte{kLastEventReason + 1};
+  EXPECT_EQ(decode(std::span(buf, kEventBytes), e2), Status::kBadHeaderField);
+}
+
 // A DUT endpoint with a recording output and an application that accepts.
 struct Recorder {
   void send(std::span<const std::byte> m) noexcept { sent.emplace_back(m.begin(), m.end()); }
@@ -393,6 +458,45 @@ TEST_F(EndpointFixture, GarbageIsCountedNeverTrusted) {
   EXPECT_EQ(s.bad_crc + s.bad_message, 2u);
   EXPECT_EQ(s.unknown_type, 1u);
   EXPECT_GE(s.sequence_gaps, 8u);
+}
+
+TEST_F(EndpointFixture, AnInjectIsAnsweredUnsupportedByADutWithoutARigAndTheRigCanAnswerLater) {
+  hello(1);
+  take();
+  std::byte b[kInjectBytes];
+  deliver(MessageType::kInject, std::span(b, encode(Inject{42, 7}, b)));
+  ASSERT_EQ(out.sent.size(), 1u);
+  Header h;
+  std::span<const std::byte> p;
+  ASSERT_EQ(decode_message(out.sent[0], h, p), Status::kOk);
+  EXPECT_EQ(h.type, MessageType::kInjected);
+  Injected a;
+  ASSERT_EQ(decode(p, a), Status::kOk);
+  EXPECT_EQ(a.token, 42u);
+  EXPECT_EQ(a.kind, 7u);
+  EXPECT_EQ(a.outcome, InjectOutcome::kUnsupported);
+  out.sent.clear();
+  // A rig takes the request and answers when the fault is over.
+  endpoint.on_message(message(MessageType::kInject, std::span(b, encode(Inject{43, 3}, b)), seq++), 0);
+  Inject taken;
+  ASSERT_TRUE(endpoint.take_inject(taken));
+  Inject again;
+  EXPECT_FALSE(endpoint.take_inject(again));
+  EXPECT_EQ(endpoint.pending_inject(), nullptr);
+  Injected later;
+  later.token = taken.token;
+  later.kind = taken.kind;
+  later.outcome = InjectOutcome::kDetected;
+  endpoint.report_injected(later);
+  endpoint.report_event(EventKind::kRestart, EventReason::kBoot, 2, 5);
+  flush();
+  std::vector<Event> events;
+  const auto hs = take(&events);
+  ASSERT_EQ(hs.size(), 2u);
+  EXPECT_EQ(hs[0].type, MessageType::kInjected);
+  ASSERT_EQ(events.size(), 1u);
+  EXPECT_EQ(events[0].kind, EventKind::kRestart);
+  EXPECT_EQ(events[0].frame_id, kNoFrame);
 }
 
 }  // namespace

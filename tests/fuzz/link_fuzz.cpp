@@ -74,6 +74,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
           round_trip<Pong>(p);
           round_trip<Stats>(p);
           round_trip<Bye>(p);
+          round_trip<Inject>(p);
+          round_trip<Injected>(p);
           FrameFragment f;
           if (decode(p, f) == gabarit::Status::kOk && (f.pixels.data() < p.data() || f.pixels.data() + f.pixels.size() > p.data() + p.size()))
             std::abort();

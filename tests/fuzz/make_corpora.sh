@@ -10,7 +10,7 @@ seeds=${2:?}
 out=${3:?}
 link_seeds=${4:?}
 rm -rf "$out"
-mkdir -p "$out"/{table,y4m,pgm,points_csv,pose_csv,link}
+mkdir -p "$out"/{table,y4m,pgm,points_csv,pose_csv,link,board_map}
 "$link_seeds" "$out/link"
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
@@ -34,4 +34,6 @@ printf 'P2\n# a comment\n3 2\n15\n0 1 2\n3 4 15\n' > "$out/pgm/p2.pgm"
 printf 'x,y\n0,0\n1,-1\n# comment\n\n16384,-16384\n' > "$out/points_csv/edges.csv"
 printf '10;20\n' > "$out/points_csv/semicolon.csv"
 printf 'frame,x,y,theta_deg,depth,visible\n0,1.5,2,0,0,1\n1,nan,2,0,0,0\n4294967296,1,1,0,0,1\n' > "$out/pose_csv/bad.csv"
+cp "$(dirname "$0")"/../../hil/boards/*.yaml "$out/board_map/"
+printf 'name: b\nrelay: x\ngpio:\n  lock: 99999\n' > "$out/board_map/bad-line.yaml"
 echo "make_corpora: $(find "$out" -type f | wc -l) seeds in $out"

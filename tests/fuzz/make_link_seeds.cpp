@@ -63,6 +63,13 @@ int main(int argc, char** argv) {
   frame(run, 1);
   put(run, MessageType::kPing, std::span(b, encode(Ping{1, 2}, b)));
   put(run, MessageType::kStats, {});
+  put(run, MessageType::kInject, std::span(b, encode(Inject{0, 9}, b)));
+  {
+    std::byte big[kInjectedBytes];
+    Injected answer;
+    set_text(answer.evidence, "a rig's answer, which a device never receives");
+    put(run, MessageType::kInjected, std::span(big, encode(answer, big)));
+  }
   put(run, MessageType::kBye, std::span(b, encode(Bye{0, 1}, b)));
   write(dir + "/run.bin", run);
   std::vector<std::byte> faults;

@@ -13,6 +13,7 @@
 #include "gabarit/app/files.hpp"
 #include "gabarit/host/synth.hpp"
 #include "gabarit/host/table_builder.hpp"
+#include "gabarit/hil/board_map.hpp"
 #include "gabarit/hil/dut.hpp"
 #include "gabarit/hil/faults.hpp"
 #include "gabarit/hil/harness.hpp"
@@ -145,6 +146,75 @@ const FrameRecord* first_with(const RunResult& r, Fate fate) {
   for (const FrameRecord& f : r.frames)
     if (f.fate == fate) return &f;
   return nullptr;
+}
+
+TEST(FaultPlan, CyclePlansTakeEachKindInTurnAndRigKindsHaveNames) {
+  const FaultPlan p = parse_fault_plan("cycle:6:drop,board-kill,usb-unplug", 2000, 1);
+  ASSERT_EQ(p.faults.size(), 333u);  // frames 6, 12, ..., 1998
+  EXPECT_EQ(p.faults[0].frame, 6u);
+  EXPECT_EQ(p.faults[1].kind, FaultKind::kBoardKill);
+  EXPECT_EQ(p.faults[2].kind, FaultKind::kUsbUnplug);
+  EXPECT_EQ(p.faults[3].kind, FaultKind::kDrop);
+  EXPECT_EQ(parse_fault_plan("cycle:10", 100, 1).faults.size(), 9u);  // the harness's own kinds by default
+  for (const FaultKind k : kRigFaultKinds) {
+    EXPECT_TRUE(is_rig_fault(k));
+    EXPECT_EQ(parse_fault_kind(fault_name(k), "test"), k);
+  }
+  EXPECT_FALSE(is_rig_fault(FaultKind::kRestart));
+  EXPECT_EQ(rig_fault_number(FaultKind::kCameraError), 1u);
+  EXPECT_EQ(rig_fault_number(FaultKind::kUsbCorrupt), 10u);
+  EXPECT_STREQ(fault_name(FaultKind::kSequenceWrap), "sequence-wrap");
+  for (const char* bad : {"cycle:1:drop", "cycle:x", "cycle:5:melt", "cycle:5:"}) EXPECT_THROW(parse_fault_plan(bad, 100, 1), app::Error) << bad;
+  // A plan file takes the rig's kinds too.
+  EXPECT_EQ(read_fault_file(write_temp("rig", "3 board-kill\n5 camera-error\n"), 10).faults[0].kind, FaultKind::kBoardKill);
+}
+
+TEST(BoardMap, ReadsTheProjectsBoardsAndRefusesMistakesByLine) {
+  for (const char* name : {"raspberry-pi-4", "virtual-board-tcp"}) {
+    const BoardMap m = load_board_map(name, GABARIT_BOARDS_DIR);
+    EXPECT_EQ(m.name, name);
+    EXPECT_FALSE(m.relay.empty());
+    EXPECT_GE(m.lock_line, 0);
+  }
+  const BoardMap m = parse_board_map("name: b\nrelay: /dev/ttyUSB1   # the UART\nbaud: 921600\ngpio:\n  chip: gpiochip4\n  strobe: 5\n", "t");
+  EXPECT_EQ(m.relay, "/dev/ttyUSB1");
+  EXPECT_EQ(m.baud, 921600u);
+  EXPECT_EQ(m.gpio_chip, "gpiochip4");
+  EXPECT_EQ(m.strobe_line, 5);
+  EXPECT_EQ(m.lock_line, -1);
+  const char* bad[] = {"name: b\n",                               // no relay
+                       "relay: x\n",                              // no name
+                       "name: b\nrelay: x\nspeed: 3\n",          // unknown key
+                       "name: b\nrelay: x\nbaud: fast\n",        // not a number
+                       "name: b\nrelay: x\n  lock: 3\n",         // indented outside a section
+                       "name: b\nrelay: x\ncamera\n",            // no colon
+                       "name: b\nrelay: x\nframe_path: hdmi\n",  // not a frame path we have
+                       "name: b\nrelay: x\nusb: 12345:1\n"};     // not VID:PID
+  for (const char* text : bad) EXPECT_THROW(parse_board_map(text, "t"), app::Error) << text;
+  try {
+    parse_board_map("name: b\nrelay: x\nspeed: 3\n", "b.yaml");
+    FAIL();
+  } catch (const app::Error& e) {
+    EXPECT_NE(std::string(e.what()).find("b.yaml:3"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(load_board_map("no-such-board", GABARIT_BOARDS_DIR), app::Error);
+}
+
+TEST(HilRun, ADutWithoutARigAnswersItsFaultsUnsupportedAndTheRunGoesOn) {
+  InprocessOptions o;
+  o.table_path = sequence().table;
+  auto dut = make_inprocess_dut(o);
+  RunConfig config = config_for(sequence());
+  config.faults = parse_fault_plan("cycle:40:board-kill,camera-error", 120, 1);
+  const RunResult r = run_hil(config, *dut);
+  EXPECT_EQ(r.error, "");
+  ASSERT_EQ(r.faults.size(), 2u);
+  for (const InjectedFault& f : r.faults) {
+    EXPECT_TRUE(f.answered);
+    EXPECT_FALSE(f.detected);
+    EXPECT_NE(f.evidence.find("unsupported"), std::string::npos) << f.evidence;
+  }
+  for (const FrameRecord& f : r.frames) ASSERT_EQ(f.reference, 1) << f.frame;
 }
 
 TEST(HilRun, TheInProcessDutMatchesTheReferenceOnEveryFrame) {

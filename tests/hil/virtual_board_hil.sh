@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# virtual_board_hil.sh GABARIT AARCH64_BUILD [FRAMES [EVERY]]
+# virtual_board_hil.sh GABARIT AARCH64_BUILD [FRAMES [EVERY [LOOPS]]]
 # `gabarit hil run --dut virtual-board` end to end: the aarch64 board
 # application on the virtual board (vivid, USB FunctionFS through dummy_hcd,
 # gpio-sim), FRAMES frames (default 2000) of 160x120 with a fault every EVERY
@@ -8,12 +8,17 @@
 # the exit status: every check passed, every frame accounted for, poses in
 # order and bit-identical to the host's reference, each kind injected at
 # least FRAMES/EVERY/15 times (rounded down), each fault detected and tracking
-# again within 1 s of its end. Prints the figures.
+# again within 1 s of its end. Prints the figures. LOOPS > 1 is a soak: the
+# sequence played LOOPS times over (--soak), its memory and latency drift
+# printed from soak.csv.
 set -euo pipefail
 g=${1:?usage: virtual_board_hil.sh GABARIT AARCH64_BUILD [FRAMES [EVERY]]}
 build=${2:?}
 frames=${3:-2000}
 every=${4:-6}
+loops=${5:-1}
+soak=()
+[ "$loops" -gt 1 ] && soak=(--soak "$loops" --soak-window 2000)
 here=$(cd "$(dirname "$0")" && pwd)
 bash "$here/../../platform/linux/virtual-board/prepare.sh" "$build/virtual-board/cache" > /dev/null
 work=$(mktemp -d)
@@ -25,10 +30,10 @@ kinds=$kinds,usb-stall,usb-unplug,usb-timeout,board-kill,usb-corrupt
 start=$SECONDS
 status=0
 "$g" hil run --dut virtual-board --virtual-board "$build" --sequence "$work/seq" --report "$work/report" \
-  --faults "cycle:$every:$kinds" 2> "$work/stderr" || status=$?
+  --faults "cycle:$every:$kinds" "${soak[@]}" 2> "$work/stderr" || status=$?
 seconds=$((SECONDS - start))
 grep -v "frames answered" "$work/stderr" | tail -5
-python3 - "$work/report" "$status" "$seconds" "$frames" "$every" <<'PY'
+python3 - "$work/report" "$status" "$seconds" "$((frames * loops))" "$every" <<'PY'
 import collections, json, sys
 report, status, seconds, frames, every = sys.argv[1], int(sys.argv[2]), int(sys.argv[3]), int(sys.argv[4]), int(sys.argv[5])
 s = json.load(open(f"{report}/summary.json"))
@@ -54,6 +59,12 @@ print(f"virtual board HIL: {s['frames']} frames, {s['poses']} poses ({s['poses_m
       f"{len(s['faults'])} faults, {s['restarts']['by_the_rig']} board restarts, {seconds} s; latency p50 "
       f"{s['latency_us']['p50'] / 1000:.1f} ms; camera p50 {st['camera']['p50'] / 1000:.1f} ms, tracking p50 "
       f"{st['track']['p50'] / 1000:.2f} ms, strobe p50 {st['strobe']['p50'] / 1000:.2f} ms ({st['strobe']['samples']} edges)")
+soak = s.get("soak")
+if soak:
+    print(f"soak: {soak['samples']} samples; host RSS {soak['host_rss_kib'][0]} -> {soak['host_rss_kib'][1]} KiB, board RSS "
+          f"{soak['dut_rss_kib'][0]} -> {soak['dut_rss_kib'][1]} KiB, latency p50 {soak['latency_p50_us'][0] / 1000:.1f} -> "
+          f"{soak['latency_p50_us'][1] / 1000:.1f} ms")
+    print(open(f"{report}/soak.csv").read())
 if problems:
     print("virtual board HIL: FAIL"); [print("  " + p) for p in problems]; sys.exit(1)
 print("virtual board HIL: PASS")
