@@ -59,6 +59,16 @@ std::uint64_t now_us() {
   return static_cast<std::uint64_t>(t.tv_sec) * 1000000u + static_cast<std::uint64_t>(t.tv_nsec) / 1000u;
 }
 
+std::string text(const char* format, ...) __attribute__((format(printf, 1, 2)));
+std::string text(const char* format, ...) {
+  char buf[256];
+  va_list a;
+  va_start(a, format);
+  std::vsnprintf(buf, sizeof buf, format, a);
+  va_end(a);
+  return buf;
+}
+
 void sleep_ms(int ms) { std::this_thread::sleep_for(std::chrono::milliseconds(ms)); }
 
 void log(const char* format, ...) __attribute__((format(printf, 1, 2)));
@@ -605,8 +615,8 @@ std::optional<link::Injected> Relay::inject(RigFault fault, const link::Inject& 
   a.attempts = 1;
   std::string error;
   char evidence[160] = {};
-  const auto done = [&](bool detected, const char* format, auto... args) {
-    std::snprintf(evidence, sizeof evidence, format, args...);
+  const auto done = [&](bool detected, const std::string& text) {
+    std::snprintf(evidence, sizeof evidence, "%s", text.c_str());
     a.outcome = detected ? link::InjectOutcome::kDetected : link::InjectOutcome::kUndetected;
   };
   switch (fault) {
@@ -619,7 +629,7 @@ std::optional<link::Injected> Relay::inject(RigFault fault, const link::Inject& 
       }
       if (!error.empty()) break;
       if (a.attempts > 5) a.attempts = 5;
-      done(camera_errors_ > before, "board: %llu error-flagged buffer(s) skipped", static_cast<unsigned long long>(camera_errors_ - before));
+      done(camera_errors_ > before, text("board: %llu error-flagged buffer(s) skipped", static_cast<unsigned long long>(camera_errors_ - before)));
       break;
     }
     case RigFault::kCameraDrop: {
@@ -628,7 +638,7 @@ std::optional<link::Injected> Relay::inject(RigFault fault, const link::Inject& 
       pump_until([&] { return camera_gaps_ > before; }, 1000);
       std::string ignored;
       (void)vivid::set_control(c_.capture, vivid::kDroppedPercent, 0, ignored);
-      done(camera_gaps_ > before, "board: %llu sequence gap(s) reported", static_cast<unsigned long long>(camera_gaps_ - before));
+      done(camera_gaps_ > before, text("board: %llu sequence gap(s) reported", static_cast<unsigned long long>(camera_gaps_ - before)));
       break;
     }
     case RigFault::kSequenceWrap: {
@@ -645,8 +655,8 @@ std::optional<link::Injected> Relay::inject(RigFault fault, const link::Inject& 
       const std::uint64_t lost = camera_lost_, back = camera_back_;
       if (!reload_camera(fault == RigFault::kModuleReload ? 1000 : 0, false, error)) break;
       pump_until([&] { return camera_back_ > back; }, 5000);
-      done(camera_lost_ > lost && camera_back_ > back, "board: camera lost (%llu) and reopened (%llu)",
-           static_cast<unsigned long long>(camera_lost_ - lost), static_cast<unsigned long long>(camera_back_ - back));
+      done(camera_lost_ > lost && camera_back_ > back, text("board: camera lost (%llu) and reopened (%llu)",
+           static_cast<unsigned long long>(camera_lost_ - lost), static_cast<unsigned long long>(camera_back_ - back)));
       break;
     }
     case RigFault::kUsbStall: {
@@ -656,7 +666,7 @@ std::optional<link::Injected> Relay::inject(RigFault fault, const link::Inject& 
         break;
       }
       pump_until([&] { return usb_.stats().halts_cleared > cleared; }, 2000);
-      done(usb_.stats().halts_cleared > cleared, "host: LIBUSB_ERROR_PIPE on IN, halt cleared");
+      done(usb_.stats().halts_cleared > cleared, text("host: LIBUSB_ERROR_PIPE on IN, halt cleared"));
       break;
     }
     case RigFault::kUsbUnplug: {
@@ -673,8 +683,8 @@ std::optional<link::Injected> Relay::inject(RigFault fault, const link::Inject& 
         break;
       }
       pump_until([&] { return usb_.stats().opens > opens; }, 5000);
-      done(usb_.stats().opens > opens, "host: device gone and reopened by polling (%llu loss(es))",
-           static_cast<unsigned long long>(usb_.stats().losses - losses));
+      done(usb_.stats().opens > opens, text("host: device gone and reopened by polling (%llu loss(es))",
+           static_cast<unsigned long long>(usb_.stats().losses - losses)));
       break;
     }
     case RigFault::kUsbTimeout: {
@@ -685,9 +695,9 @@ std::optional<link::Injected> Relay::inject(RigFault fault, const link::Inject& 
       while (now_us() < end && usb_.is_open()) {
         if (usb_.receive(m, 1) == link::UsbResult::kOk) on_board_message(m);
       }
-      done(usb_.stats().timeouts > timeouts, "host: %llu transfer timeout(s), %llu with a partial message kept",
+      done(usb_.stats().timeouts > timeouts, text("host: %llu transfer timeout(s), %llu with a partial message kept",
            static_cast<unsigned long long>(usb_.stats().timeouts - timeouts),
-           static_cast<unsigned long long>(usb_.stats().partial_timeouts));
+           static_cast<unsigned long long>(usb_.stats().partial_timeouts)));
       break;
     }
     case RigFault::kBoardKill: {
@@ -700,8 +710,8 @@ std::optional<link::Injected> Relay::inject(RigFault fault, const link::Inject& 
       expecting_kill_ = false;
       board_restart("killed");
       const bool back = wait_usb_open(10000);
-      done(back && safe, "board: killed (SIGKILL), lines low while down: %s, USB back: %s", safe ? "yes" : "NO",
-           back ? "yes" : "NO");
+      done(back && safe, text("board: killed (SIGKILL), lines low while down: %s, USB back: %s", safe ? "yes" : "NO",
+           back ? "yes" : "NO"));
       break;
     }
     case RigFault::kUsbCorrupt: {
@@ -720,7 +730,7 @@ std::optional<link::Injected> Relay::inject(RigFault fault, const link::Inject& 
       (void)board_send(link::MessageType::kStats, std::span<const std::byte>(req, 0));
       pump_until([&] { return board_stats_.has_value(); }, 1000);
       const std::uint32_t bad_after = board_stats_ ? board_stats_->bad_crc : 0;
-      done(bad_after == bad_before + 1, "board: bad CRC count %u -> %u", bad_before, bad_after);
+      done(bad_after == bad_before + 1, text("board: bad CRC count %u -> %u", bad_before, bad_after));
       break;
     }
   }
