@@ -4,10 +4,11 @@
 # application on the virtual board (vivid, USB FunctionFS through dummy_hcd,
 # gpio-sim), FRAMES frames (default 2000) of 160x120 with a fault every EVERY
 # frames (default 6), the harness's link faults and the rig's ten kinds in
-# turn (each at least 20 times with the defaults). Checks the report, not only
+# turn (each at least 20 times with the defaults); first, 200 frames without
+# faults whose poses must be byte for byte `gabarit track`'s. Checks the report, not only
 # the exit status: every check passed, every frame accounted for, poses in
-# order and bit-identical to the host's reference, each kind injected at
-# least FRAMES/EVERY/15 times (rounded down), each fault detected and tracking
+# order and bit-identical to the host's reference, each kind injected about
+# FRAMES/EVERY/15 times (22 with the defaults), each fault detected and tracking
 # again within 1 s of its end. Prints the figures. LOOPS > 1 is a soak: the
 # sequence played LOOPS times over (--soak), its memory and latency drift
 # printed from soak.csv.
@@ -25,6 +26,18 @@ work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 "$g" synth --shape curve --frames "$frames" --max-step 3 --noise 0.02 --size 160x120 --seed 7 -o "$work/seq" 2> /dev/null
 "$g" tables build --model "$work/seq/model.pgm" --binary --x -4:4:9 --y -4:4:9 -o "$work/seq/table.gbt" 2> /dev/null
+if [ "$loops" = 1 ]; then
+  # Without faults, the poses are byte for byte `gabarit track`'s on the same frames.
+  "$g" synth --shape curve --frames 200 --max-step 3 --noise 0.02 --size 160x120 --seed 8 -o "$work/clean" 2> /dev/null
+  "$g" tables build --model "$work/clean/model.pgm" --binary --x -4:4:9 --y -4:4:9 -o "$work/clean/table.gbt" 2> /dev/null
+  "$g" hil run --dut virtual-board --virtual-board "$build" --sequence "$work/clean" --report "$work/clean-report" 2> /dev/null ||
+    { echo "virtual board HIL: FAIL: the run without faults failed"; exit 1; }
+  "$g" track --table "$work/clean/table.gbt" --frames "$work/clean/frames.y4m" \
+    --init "$(sed -n 2p "$work/clean/gt.csv" | cut -d, -f2,3)" -o "$work/clean/track.csv" 2> /dev/null
+  cmp -s "$work/clean/track.csv" "$work/clean-report/poses.csv" ||
+    { echo "virtual board HIL: FAIL: the board's poses differ from gabarit track's"; diff "$work/clean/track.csv" "$work/clean-report/poses.csv" | head -5; exit 1; }
+  echo "virtual board HIL: 200 poses over USB byte-identical to gabarit track's"
+fi
 kinds=drop,duplicate,reorder,corrupt,bitflip,camera-error,camera-drop,sequence-wrap,camera-disconnect,module-reload
 kinds=$kinds,usb-stall,usb-unplug,usb-timeout,board-kill,usb-corrupt
 start=$SECONDS
@@ -45,7 +58,8 @@ if s["unaccounted"] or s["out_of_order"] or s["double_answers"]:
 if s["poses"] != s["poses_matching_reference"]: problems.append("poses not bit-identical to the reference")
 by_kind = collections.defaultdict(list)
 for f in s["faults"]: by_kind[f["kind"]].append(f)
-want = frames // every // 15
+want = len(s["faults"]) // 15  # the cycle gives each kind this many, or one more
+if len(s["faults"]) < frames // every - 1: problems.append(f"only {len(s['faults'])} faults injected")
 for kind, fs in sorted(by_kind.items()):
     rec = [f["recovery_ms"] for f in fs if "recovery_ms" in f]
     bad = [f for f in fs if not (f["detected"] and f["recovered"])]

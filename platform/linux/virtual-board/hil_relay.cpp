@@ -46,6 +46,8 @@
 #include "gabarit/link/protocol.hpp"
 #include "gabarit/link/rig_faults.hpp"
 #include "gabarit/link/usb_host.hpp"
+#include "luma.hpp"
+#include "v4l2_capture.hpp"
 #include "vivid.hpp"
 
 namespace {
@@ -361,6 +363,7 @@ class Relay {
   bool camera_up(bool wrap_sequence, std::string& error);
   void camera_down();
   bool reload_camera(int absent_ms, bool wrap_sequence, std::string& error);
+  bool loop_shows(const std::uint8_t* pixels, std::uint32_t w, std::uint32_t h, std::string& error);
   // Faults.
   // nullopt: the fault ends later (a sequence wrap), answered by check_wraps().
   std::optional<link::Injected> inject(RigFault fault, const link::Inject& request);
@@ -563,12 +566,41 @@ bool Relay::camera_up(bool wrap_sequence, std::string& error) {
     pixels = black.data(), w = c_.width, h = c_.height;
   }
   if (!output_.show(pixels, w, h, 0, error)) return false;
-  sleep_ms(100);  // a few of vivid's frame periods: the loop shows it
+  // vivid starts looping only once its output thread has taken the buffer:
+  // until the capture side shows this very frame, the board must not open
+  // it (it would track vivid's test pattern).
+  if (!loop_shows(pixels, w, h, error)) return false;
   // The board opens the camera only through this link, once it is set up,
   // as a udev rule would publish it.
   ::unlink(c_.camera_link.c_str());
   if (::symlink(c_.capture.c_str(), c_.camera_link.c_str()) != 0) return error = "making " + c_.camera_link, false;
   return true;
+}
+
+bool Relay::loop_shows(const std::uint8_t* pixels, std::uint32_t w, std::uint32_t h, std::string& error) {
+  const std::uint32_t want = crc32c(std::as_bytes(std::span(pixels, std::size_t{w} * h)));
+  board::V4l2Capture capture;
+  board::CaptureOptions o;
+  o.device = c_.capture;
+  o.pixel_format = board::kFourccGrey;
+  o.buffers = 2;
+  if (!capture.open(o)) return error = "checking the loop: " + capture.error(), false;
+  const std::uint64_t end = now_us() + 3000000u;
+  while (now_us() < end) {
+    pollfd p{capture.fd(), POLLIN, 0};
+    if (::poll(&p, 1, 100) <= 0) continue;
+    board::CapturedFrame f;
+    const board::CaptureEvent e = capture.dequeue(f);
+    if (e == board::CaptureEvent::kDeviceLost) return error = "checking the loop: " + capture.error(), false;
+    if (e != board::CaptureEvent::kFrame) continue;
+    const std::size_t stride = capture.layout().bytes_per_line;
+    std::uint32_t crc = 0;
+    for (std::uint32_t y = 0; y < h && f.bytes_used >= (y + 1) * stride; ++y)
+      crc = crc32c_update(crc, std::as_bytes(std::span(f.data + std::size_t{y} * stride, w)));
+    (void)capture.requeue(f.index);
+    if (crc == want) return true;
+  }
+  return error = "vivid's capture side did not show the output's frame in 3 s (Loop Video off?)", false;
 }
 
 void Relay::camera_down() {
