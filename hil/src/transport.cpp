@@ -101,7 +101,6 @@ std::optional<std::vector<std::byte>> StreamTransport::receive(Clock::time_point
     const ssize_t r = ::read(read_fd_, pending_.data(), pending_.size());
     if (r > 0) {
       pending_.resize(static_cast<std::size_t>(r));
-      bytes_received_ += static_cast<std::uint64_t>(r);
       continue;
     }
     pending_.clear();
@@ -161,7 +160,6 @@ std::optional<std::vector<std::byte>> UdpTransport::receive(Clock::time_point de
     const ssize_t r = ::recv(fd_, buffer.data(), buffer.size(), 0);
     if (r >= 0) {
       buffer.resize(static_cast<std::size_t>(r));
-      bytes_received_ += static_cast<std::uint64_t>(r);
       return buffer;
     }
     if (errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR && errno != ECONNREFUSED)
@@ -203,7 +201,6 @@ std::optional<std::vector<std::byte>> Loopback::End::receive(Clock::time_point d
   if (q.empty()) throw app::Error("loopback: closed");
   std::vector<std::byte> m = std::move(q.front());
   q.pop_front();
-  bytes_received_ += m.size();
   return m;
 }
 

@@ -10,15 +10,6 @@
 
 namespace gabarit {
 
-const char* confidence_name(Confidence confidence) noexcept {
-  switch (confidence) {
-    case Confidence::kHigh: return "high";
-    case Confidence::kIntermediate: return "intermediate";
-    case Confidence::kNone: return "none";
-  }
-  return "unknown";
-}
-
 Confidence classify(float score, float next_score, float reference, const MotionFilterParams& p) noexcept {
   if (!(score > 0.0f) || score < p.low_ratio * reference) return Confidence::kNone;
   if (score >= p.high_ratio * reference && score - next_score >= p.high_margin * reference) return Confidence::kHigh;

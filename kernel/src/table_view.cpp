@@ -167,8 +167,8 @@ Status TableView::open(std::span<const std::byte> bytes, TableView& out) noexcep
 
   // Header fields. Past the CRC only a deliberately crafted table reaches
   // here, but it must still be refused without any out-of-bounds read.
-  // Flags: only the model-images section, and only from version 1.1.
-  // Flags: the model-images section from version 1.1, compact offsets from 1.2.
+  // Flags: the model-images section from version 1.1, compact offsets from
+  // 1.2, orientation channels from 1.3.
   const std::uint32_t flags = load_le<std::uint32_t>(b + off::kFlags);
   const std::uint16_t minor = load_le<std::uint16_t>(b + off::kVersionMinor);
   const bool has_images = (flags & table_format::kFlagModelImages) != 0;

@@ -6,10 +6,6 @@
 namespace gabarit {
 namespace {
 
-
-// Rotate features found in `window` into the table frame, keep those that
-// land inside the ROI, once each, compacting them in place (an output index
-// never passes its input index).
 // The image window whose features can land in the ROI centred on (cx, cy):
 // the ROI itself unrotated, else the square holding it at any angle.
 // Precondition: the square's side fits 16 bits.
@@ -132,6 +128,9 @@ Status prepare_frame(const TableView& table, const Detector& detector, const Ima
   return Status::kOk;
 }
 
+// Rotate features found in `window` into the table frame, keep those that
+// land inside the ROI, once each, compacting them in place (an output index
+// never passes its input index).
 Status map_features(const TableView& table, const ImageView& image, std::span<const RoiPoint> detected, const ImageWindow& window,
                     const Pose& previous, TrackerScratch scratch, PreparedFrame& out) noexcept {
   if (!pose_in_range(previous) || (table.channel_bits() != 0 && !image.valid())) {

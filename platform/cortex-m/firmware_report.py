@@ -2,6 +2,7 @@
 """Worst-case stack and memory use of the Cortex-M firmware.
 
 Usage: firmware_report.py --build DIR --map FIRMWARE.map [--flash-budget BYTES] [--ram-budget BYTES]
+       firmware_report.py --build DIR --stack-only     (the stack checks alone, any objects' call graphs)
        firmware_report.py --self-test
 
 Stack: reads the call graphs GCC writes with -fcallgraph-info=su (one .ci
@@ -12,7 +13,11 @@ or bounded (alloca/VLA), on an indirect call, and when the firmware's worst
 case plus the exception allowance exceeds the stack reserved in firmware.ld
 (the map's .stack section).
 Library leaves (memcpy, memset, memcmp: newlib's are leaf functions using no
-stack beyond pushed registers) count as kLibraryLeafBytes.
+stack beyond pushed registers) count as kLibraryLeafBytes; any other callee
+with no call graph fails the check (its stack, and any cycle through it,
+would be unknown). A lambda is shown as its enclosing function followed by
+`::<lambda at FILE:LINE>`, so a chain through the lambdas of one function
+does not read as recursion.
 
 Memory: flash and RAM used, from the linker map's output sections, and the
 share of flash taken by the embedded table, test vectors and session vectors.
@@ -24,6 +29,9 @@ import re
 import sys
 
 kLibraryLeafBytes = 32      # pushed registers of a newlib string routine
+kLibraryLeaves = {"memcpy", "memset", "memmove", "memcmp", "strlen", "__builtin_memcpy", "__builtin_memset",
+                  "__builtin_memmove", "__builtin_memcmp", "__aeabi_memcpy", "__aeabi_memset", "__aeabi_memclr",
+                  "__aeabi_memcpy4", "__aeabi_memclr4", "__aeabi_memset4", "__aeabi_memmove"}
 kExceptionFrameBytes = 104  # a fault taken at the deepest point: FP context frame (26 words)
 
 NODE = re.compile(r'node: \{ title: "([^"]+)" label: "([^"]*)"')
@@ -37,22 +45,39 @@ def load_graph(build_dir):
         text = ci.read_text()
         for title, label in NODE.findall(text):
             m = FRAME.search(label)
-            names.setdefault(title, label.split("\\n")[0])
+            lines = label.split("\\n")
+            names.setdefault(title, lines[0])
             if m:  # a definition (declarations have no frame)
                 frames[title] = int(m.group(1))
                 kinds[title] = m.group(2)
-                names[title] = label.split("\\n")[0]
+                names[title] = display_name(lines[0], lines[1] if len(lines) > 2 else "")
         for src, dst in EDGE.findall(text):
             edges.setdefault(src, set()).add(dst)
     return frames, names, edges, kinds
 
 
 def resolve(title, frames):
-    """A call to an external symbol names it without the defining file's prefix."""
+    """A call to an external symbol names it without the defining file's
+    prefix. A call to a complete-object constructor or destructor (C1/D1)
+    reaches the base-object one (C2/D2) that GCC defines and aliases it to."""
     if title in frames:
         return title
     bare = title.split(":")[-1]
-    return bare if bare in frames else None
+    if bare in frames:
+        return bare
+    for complete, base in (("C1E", "C2E"), ("D1E", "D2E")):
+        if complete in bare:
+            for candidate in (title.replace(complete, base), bare.replace(complete, base)):
+                if candidate in frames:
+                    return candidate
+    return None
+
+
+def library_leaf(name):
+    """newlib's string routines and libgcc's arithmetic helpers (__aeabi_*):
+    leaves, or chains of a few pushed registers (at most 8 B in the firmware's
+    disassembly), within kLibraryLeafBytes."""
+    return name in kLibraryLeaves or re.fullmatch(r"__aeabi_\w+", name) is not None
 
 
 def worst_case(entry, frames, edges, problems, names):
@@ -73,6 +98,8 @@ def worst_case(entry, frames, edges, problems, names):
                 if bare.startswith("__indirect_call") or "indirect" in bare:
                     problems.append(f"indirect call in {names.get(node, node)}")
                     continue
+                if not library_leaf(bare):
+                    problems.append(f"no call graph for {names.get(callee, bare)} (called from {names.get(node, node)})")
                 depth, sub = kLibraryLeafBytes, [callee]
             else:
                 depth, sub = visit(target)
@@ -85,9 +112,33 @@ def worst_case(entry, frames, edges, problems, names):
     return visit(entry)
 
 
+def display_name(signature, location):
+    """A definition's name as the report shows it: a lambda keeps the enclosing
+    function's name and gains '::<lambda at FILE:LINE>' (GCC labels it
+    'f(args)::<lambda(args)>'), so that distinct functions never share a name."""
+    if "::<lambda" not in signature:
+        return signature
+    where = ":".join(pathlib.Path(location).name.split(":")[:2]) if location else "?"
+    return signature.split("::<lambda")[0] + f"::<lambda at {where}>"
+
+
 def short(label):
-    """'gabarit::Status gabarit::track_step(const TableView&, ...)' -> 'gabarit::track_step'"""
-    return label.split("(")[0].split()[-1]
+    """'gabarit::Status gabarit::track_step(const TableView&, ...)' -> 'gabarit::track_step';
+    'R f(args)::<lambda at x.cpp:12>' -> 'f::<lambda at x.cpp:12>'"""
+    lam = ""
+    if "::<lambda at " in label:
+        label, lam = label.split("::<lambda at ", 1)
+        lam = "::<lambda at " + lam
+    depth, cut = 0, len(label)
+    for i, ch in enumerate(label):  # the name ends at the parameter list's '(' (not one inside a template)
+        if ch == "<":
+            depth += 1
+        elif ch == ">":
+            depth -= 1
+        elif ch == "(" and depth == 0:
+            cut = i
+            break
+    return label[:cut].split()[-1] + lam
 
 
 def map_sections(map_path):
@@ -118,16 +169,38 @@ def self_test():
     return 0 if ok else 1
 
 
+def stack_only(build_dir):
+    frames, names, edges, kinds = load_graph(build_dir)
+    if not frames:
+        print(f"FAIL: no call-graph files (*.ci) under {build_dir}: build with -fcallgraph-info=su")
+        return 1
+    problems = [f"{kinds[t]} frame in {names[t]}" for t in frames if kinds[t] != "static"]
+    for entry in sorted(t for t in frames if ":" not in t):
+        depth, chain = worst_case(entry, frames, edges, problems, names)
+        shown = " → ".join(short(names.get(c, c.split(":")[-1])) for c in chain)
+        print(f"{short(names[entry])}: {depth} B: {shown}")
+    for p in sorted(set(problems)):
+        print(f"FAIL: {p}")
+    print("PASS: stack bounded, no recursion" if not problems else "")
+    return 1 if problems else 0
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--build")
     ap.add_argument("--map")
     ap.add_argument("--self-test", action="store_true", help="check that recursion and dynamic frames are caught")
+    ap.add_argument("--stack-only", action="store_true",
+                    help="the stack checks alone, every global function of the call graphs an entry point (no map)")
     ap.add_argument("--flash-budget", type=int, default=2 * 1024 * 1024)
     ap.add_argument("--ram-budget", type=int, default=512 * 1024)
     args = ap.parse_args()
     if args.self_test:
         return self_test()
+    if args.stack_only:
+        if not args.build:
+            ap.error("--stack-only needs --build")
+        return stack_only(args.build)
     if not args.build or not args.map:
         ap.error("--build and --map are required")
 

@@ -1,16 +1,18 @@
 #!/usr/bin/env bash
 # Builds tests/consumer against gabarit as a firmware project would:
-#   run.sh install BUILD_DIR TABLE [TOOLCHAIN_FILE]
+#   run.sh install BUILD_DIR TABLE|- [TOOLCHAIN_FILE]
 #       installs BUILD_DIR (a configured and built gabarit) into a temporary
 #       prefix, then configures the consumer with find_package against it;
 #   run.sh subproject SOURCE_DIR TABLE [TOOLCHAIN_FILE]
 #       configures the consumer with FetchContent on the source tree.
+# TABLE - (bare metal only): link an empty table.
 # Without a toolchain file the program is run and must exit 0; with one
 # (bare metal) it must link.
 set -euo pipefail
 mode=${1:?usage: run.sh install|subproject DIR TABLE [TOOLCHAIN_FILE]}
 dir=$(cd "${2:?}" && pwd)
-table=$(cd "$(dirname "${3:?}")" && pwd)/$(basename "$3")
+table=${3:?}
+[ "$table" = - ] && table="" || table=$(cd "$(dirname "$table")" && pwd)/$(basename "$table")
 toolchain=${4:-}
 here=$(cd "$(dirname "$0")" && pwd)
 work=$(mktemp -d)

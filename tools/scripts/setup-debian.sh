@@ -4,6 +4,7 @@
 set -euo pipefail
 packages=(
   build-essential cmake ninja-build git python3
+  universal-ctags         # tests/function_length_check.py: function extents
   googletest libgtest-dev
   libeigen3-dev           # the kernel's motion filter (fixed-size Eigen, headers only)
   g++-aarch64-linux-gnu g++-arm-linux-gnueabihf qemu-user qemu-system-arm

@@ -46,7 +46,6 @@
 namespace gabarit {
 
 enum class Confidence : std::uint8_t { kHigh = 0, kIntermediate = 1, kNone = 2 };
-const char* confidence_name(Confidence confidence) noexcept;
 
 struct MotionFilterParams {
   float high_ratio = 0.7f;

@@ -101,7 +101,6 @@ class TrackingSession {
   void use_detection_recovery(DetectionRecovery* stage) noexcept { detection_ = stage; }
 
   const Pose& pose() const noexcept { return pose_; }
-  float reference_score() const noexcept { return filter_.reference(); }
   const MotionFilterState& motion() const noexcept { return filter_.state(); }
   bool lost() const noexcept { return lost_; }
 

@@ -1,6 +1,6 @@
 // The device side of the HIL link: what every DUT runs between its transport
 // and its tracker (the in-process DUT, the Verilated voter's, the Cortex-M
-// firmware, the Linux board). Kernel-grade: no heap, the frame slots are the
+// firmware, the virtual board's relay). Kernel-grade: no heap, the frame slots are the
 // caller's memory, every message is checked before anything in it is used.
 //
 // The endpoint answers HELLO (after asking the application to start a run),

@@ -83,7 +83,6 @@ class UsbHostLink {
   const std::string& error() const { return error_; }
   const std::string& serial() const { return serial_; }    // of the open device
   const std::string& product() const { return product_; }
-  std::uint16_t max_packet_in() const { return packet_in_; }
 
  private:
   enum class Done { kCompleted, kTimedOut, kStall, kGone };

@@ -37,7 +37,6 @@ class Transport {
   virtual std::optional<std::vector<std::byte>> receive(Clock::time_point deadline) = 0;
   // Bytes this side put on the wire (framing included), for the overhead figure.
   std::uint64_t bytes_sent() const { return bytes_sent_; }
-  std::uint64_t bytes_received() const { return bytes_received_; }
   // Framing errors seen by this side's decoder (streams).
   virtual std::uint32_t framing_errors() const { return 0; }
   // Bytes `message` takes on the wire (with its framing).
@@ -51,7 +50,7 @@ class Transport {
 
  protected:
   void apply_flips(std::span<std::byte> wire);
-  std::uint64_t bytes_sent_ = 0, bytes_received_ = 0;
+  std::uint64_t bytes_sent_ = 0;
   double framing_seconds_ = 0;
 
  private:
