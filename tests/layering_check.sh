@@ -60,7 +60,7 @@ check() {
   declare -A owner=(
     [gabarit_kernel]=kernel [gabarit::kernel]=kernel
     [gabarit_app]=app [gabarit::app]=app [gabarit_test_vectors]=app [gabarit::test_vectors]=app
-    [gabarit_link]=app [gabarit::link]=app
+    [gabarit_link]=app [gabarit::link]=app [gabarit_session_profile]=app [gabarit::session_profile]=app
     [gabarit_host]=host [gabarit::host]=host [gabarit_bench_lib]=tools
     [gabarit_hil]=hil [gabarit::hil]=hil
     [gabarit_board]=platform)

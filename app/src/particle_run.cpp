@@ -1,45 +1,26 @@
-#include "gabarit/host/particle_run.hpp"
+#include "gabarit/app/particle_run.hpp"
 
 #include <algorithm>
 #include <chrono>
 #include <optional>
 #include <string>
 
-#include "gabarit/app/args.hpp"
 #include "gabarit/app/error.hpp"
 
-namespace gabarit::host {
+namespace gabarit::app {
 
 const char* name_of(ParticleMeasureKind kind) noexcept {
   return kind == ParticleMeasureKind::kEdges ? "edges" : "stencil";
 }
 
-void switch_off_improvements(const std::string& list, ParticleFilterOptions& o, const char* option) {
-  for (std::size_t start = 0; start <= list.size();) {
-    const std::size_t comma = std::min(list.find(',', start), list.size());
-    const std::string word = list.substr(start, comma - start);
-    if (word == "all") {
-      o = plain_condensation();
-    } else if (word == "modes") {
-      o.modes = false;
-    } else if (word == "disambiguation") {
-      o.disambiguate = false;
-    } else if (word == "narrowing") {
-      o.narrow_spread = false;
-    } else if (word == "kinematics") {
-      o.kinematic_weighting = false;
-    } else if (word == "reinit") {
-      o.partial_reinit = false;
-    } else if (word == "mode-filter") {
-      o.mode_filter = false;
-    } else if (word == "velocity") {
-      o.constant_velocity = false;
-    } else {
-      throw app::UsageError(std::string(option) + ": '" + word +
-                            "' is none of modes, disambiguation, narrowing, kinematics, reinit, mode-filter, velocity, all");
-    }
-    start = comma + 1;
-  }
+ParticleRunOptions particle_run_options(const SessionProfile& profile) {
+  ParticleRunOptions o;
+  o.particles = profile.particles;
+  o.seed = profile.seed;
+  o.edge_stride = profile.edge_stride;
+  o.edge_tolerance = profile.edge_tolerance;
+  o.filter = particle_filter_options(profile.particle_improvements_off);
+  return o;
 }
 
 struct ParticleTracker::Parts {
@@ -146,4 +127,4 @@ void run_particle_tracking(const TableView& table, app::FrameSource& frames, con
   }
 }
 
-}  // namespace gabarit::host
+}  // namespace gabarit::app

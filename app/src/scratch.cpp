@@ -62,21 +62,6 @@ SessionScratch SessionBuffers::scratch() {
   return {fine_.scratch(), coarse_ ? coarse_->scratch() : TrackerScratch{}, search_features_};
 }
 
-SessionOptions session_options(bool plain, bool motion_filter, bool refine, bool recover) {
-  if (!plain) return SessionOptions{};
-  const SessionOptions defaults;
-  SessionOptions o = kPlainSession;
-  o.motion_filter = motion_filter;
-  o.refine = refine;
-  o.recover = recover;
-  if (motion_filter) {
-    o.vote_at_last_pose = defaults.vote_at_last_pose;
-    o.follow_when_unsure = defaults.follow_when_unsure;
-    o.theta_observability = defaults.theta_observability;
-  }
-  return o;
-}
-
 TableFocusStack::TableFocusStack(const TableView& table) {
   if (!table.has_model_images()) return;
   for (std::uint16_t d = 0; d < table.depth_count(); ++d) views_.push_back(table.model_image(d));

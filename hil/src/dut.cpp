@@ -57,7 +57,7 @@ class InprocessDut final : public DutDriver {
   std::chrono::milliseconds stall_interval() const override { return std::chrono::milliseconds(5); }
   std::string description() const override {
     return std::string("the kernel's TrackingSession on a thread, behind ") + (options_.udp ? "UDP on 127.0.0.1" : "a loopback link") +
-           (options_.plain ? " (plain loop)" : "");
+           (options_.profile.plain ? " (plain loop)" : "");
   }
 
   void start() override {
@@ -91,7 +91,7 @@ class InprocessDut final : public DutDriver {
  private:
   void run(Transport& end) noexcept {
     try {
-      app::SessionDut app(table_.view(), options_.plain, &steady_micros);
+      app::SessionDut app(table_.view(), options_.profile, &steady_micros);
       link::Caps caps;
       caps.max_payload = options_.max_payload;
       caps.table_crc = crc32(table_.bytes());

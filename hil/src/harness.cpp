@@ -12,6 +12,7 @@
 #include "gabarit/app/error.hpp"
 #include "gabarit/app/files.hpp"
 #include "gabarit/app/image_io.hpp"
+#include "gabarit/app/hosted_session.hpp"
 #include "gabarit/app/scratch.hpp"
 #include "gabarit/crc32.hpp"
 #include "gabarit/host/evaluation.hpp"
@@ -62,23 +63,14 @@ using link::MessageType;
 // reports, fed the frames the DUT tracked in the order it tracked them.
 class Reference {
  public:
-  Reference(const TableView& table, std::uint32_t mode)
-      : options_(app::session_options((mode & link::kModeSession) == 0, false, false, false)),
-        buffers_(table, nullptr, app::VoterChoice::kAuto, options_.recover && (mode & link::kModeSharedSearch) != 0),
-        stack_(table),
-        use_stack_((mode & link::kModeFocusStack) != 0),
-        session_(table, nullptr, detector_of(table)) {}
+  Reference(const TableView& table, std::uint32_t mode) : session_(table, app::profile_from_mode_bits(mode)) {}
 
-  bool start(const Pose& initial) {
-    if (session_.start(options_, initial) != Status::kOk) return false;
-    session_.use_focus_stack(use_stack_ ? stack_.get() : nullptr);
-    return true;
-  }
+  bool start(const Pose& initial) { return session_.start(initial); }
 
   // "" when the DUT's report is bit-identical to the reference's, else the first field that differs.
   std::string check(const app::GrayImage& frame, const link::PoseReport& dut) {
     SessionResult r;
-    if (const Status s = session_.step(frame.view(), buffers_.scratch(), r); s != Status::kOk)
+    if (const Status s = session_.step(frame.view(), r); s != Status::kOk)
       return std::string("the reference failed: ") + status_name(s);
     const link::PoseReport ref = link::session_report(r);
     const auto bits = [](float f) {
@@ -107,11 +99,7 @@ class Reference {
   }
 
  private:
-  SessionOptions options_;
-  app::SessionBuffers buffers_;
-  app::TableFocusStack stack_;
-  bool use_stack_;
-  TrackingSession session_;
+  app::HostedSession session_;
 };
 
 enum class RestartCause { kPlanned, kHung, kCrashed };
@@ -406,7 +394,13 @@ void Run::handshake(const Pose& initial, std::uint32_t first_frame) {
     throw RunAborted{std::string("the DUT refused the run: ") + link::refusal_name(caps_.refusal)};
   if (run_id_ == 1) {
     result_.caps = caps_;
-    reference_.emplace(table_.view(), caps_.mode);
+    if ((caps_.mode & link::kModeTuned) != 0)
+      throw RunAborted{"the DUT runs a session profile with tuned numbers, which CAPS does not carry: the reference cannot mirror it"};
+    try {
+      reference_.emplace(table_.view(), caps_.mode);
+    } catch (const app::Error& e) {
+      throw RunAborted{std::string("the reference cannot run the DUT's mode: ") + e.what()};
+    }
     window_ = std::clamp<std::uint32_t>(caps_.frame_slots, 1, link::kMaxFrameSlots);
     max_payload_ = std::clamp<std::size_t>(caps_.max_payload, link::kMinPayload, link::kMaxPayload);
   }

@@ -1,10 +1,9 @@
 // The HIL firmware: a device under test for `gabarit hil run --dut cortex-m`.
 // It validates the table in its flash slot once (which the harness fills
 // before reset), then serves the HIL link on UART0 (COBS-framed,
-// docs/hil-protocol.md): frames in, a TrackingSession with gabarit track's
-// defaults (the recovery search without shared features, which would need
-// ~4 bytes per pixel of its window; depth and angle by intensity with the
-// table's model images), poses out. Timestamps count SysTick at the core
+// docs/hil-protocol.md): frames in, the firmware's session
+// (firmware_session.hpp: gabarit track's defaults less the search's shared
+// features, the static twin of app::HostedSession), poses out. Timestamps count SysTick at the core
 // clock; under QEMU -icount that is guest time.
 // Every buffer is static, sized by the kernel's constexpr formulas; a table
 // too big for them, or none, is refused in CAPS (no-valid-table).
@@ -20,7 +19,7 @@
 #include "gabarit/link/session_report.hpp"
 #include "gabarit/table_format.hpp"
 #include "gabarit/table_view.hpp"
-#include "gabarit/tracking_session.hpp"
+#include "firmware_session.hpp"
 #include "tracker_capacity.hpp"
 #include "uart.hpp"
 
@@ -91,29 +90,19 @@ class FirmwareDut {
  public:
   // `table` is `view` when it opened, else null (and `view` is never used).
   FirmwareDut(const TableView& view, const TableView* table, Timer& timer) noexcept
-      : table_(table), timer_(timer), session_(view, nullptr, detector_of(view)) {
-    if (table_ != nullptr && table_->has_model_images() && table_->depth_count() <= kMaxStackDepths) {
-      for (std::uint16_t d = 0; d < table_->depth_count(); ++d) g_stack_views[d] = table_->model_image(d);
-      stack_ = FocusStack{std::span<const ImageView>(g_stack_views, table_->depth_count()), table_->model_ref_x(),
-                          table_->model_ref_y(), 2};
-      has_stack_ = true;
-    }
-  }
-  std::uint32_t mode() const noexcept { return link::kModeSession | (has_stack_ ? link::kModeFocusStack : 0u); }
+      : table_(table), timer_(timer), session_(view, table != nullptr ? std::span(g_stack_views) : std::span<ImageView>()) {}
+  std::uint32_t mode() const noexcept { return session_.mode(); }
 
   link::Refusal start(const link::Hello& hello) noexcept {
     if (table_ == nullptr) return link::Refusal::kNoTable;
-    if (session_.start(SessionOptions{}, hello.initial) != Status::kOk) return link::Refusal::kBadPose;
-    session_.use_focus_stack(has_stack_ ? &stack_ : nullptr);
-    started_ = true;
-    return link::Refusal::kNone;
+    return session_.start(hello.initial) ? link::Refusal::kNone : link::Refusal::kBadPose;
   }
   std::uint64_t now() noexcept { return timer_.now(); }
 
   bool track_next(link::DutEndpoint& endpoint) noexcept {
     link::ReadyFrame frame;
     if (!endpoint.next_frame(frame)) return false;
-    if (!started_) {
+    if (!session_.started()) {
       endpoint.report_failure(link::EventKind::kSkipped, link::EventReason::kNotStarted, 0, now());
       return true;
     }
@@ -123,7 +112,7 @@ class FirmwareDut {
     fine.roi_mask = g_roi_mask;
     const ImageView image{frame.pixels.data(), frame.width, frame.height, frame.width};
     SessionResult result;
-    if (const Status s = session_.step(image, {fine, {}, {}}, result); s != Status::kOk) {
+    if (const Status s = session_.step(image, fine, result); s != Status::kOk) {
       endpoint.report_failure(link::EventKind::kError, link::EventReason::kTracking, static_cast<std::uint32_t>(s), now());
       return true;
     }
@@ -134,9 +123,7 @@ class FirmwareDut {
  private:
   const TableView* table_;
   Timer& timer_;
-  TrackingSession session_;
-  FocusStack stack_;
-  bool has_stack_ = false, started_ = false;
+  mcu::FirmwareSession session_;
 };
 
 // The table in the slot, validated once: its header's size, then the

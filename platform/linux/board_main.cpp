@@ -26,7 +26,9 @@
 #include "gabarit/app/args.hpp"
 #include "gabarit/app/files.hpp"
 #include "gabarit/app/pose_row.hpp"
+#include "gabarit/app/hosted_session.hpp"
 #include "gabarit/app/scratch.hpp"
+#include "gabarit/app/session_profile_io.hpp"
 #include "gabarit/crc32.hpp"
 #include "gabarit/link/session_report.hpp"
 #include "board_link.hpp"
@@ -62,9 +64,7 @@ struct Config {
   board::UsbGadgetOptions usb_gadget;
   std::uint32_t window_width = 0, window_height = 0;  // 0: the whole frame
   bool skip_repeats = false;
-  bool plain = false;
-  SessionOptions session;  // the robust session by default, as gabarit track
-  bool focus_stack = true;  // the table's model images, when it carries them
+  app::SessionProfile profile;  // the session's defaults, as gabarit track
 };
 
 std::uint32_t parse_format(const std::string& text) {
@@ -100,11 +100,6 @@ Config parse(int argc, char** argv, bool& help_shown) {
        {"--size", "WxH", "frame size to request (default: the device's current size)"},
        {"--binary", "", "binary detector on frames whatever the table says"},
        {"--voter", "auto|csr|dense", "voting method; results are identical (default auto)"},
-       {"--plain", "", "the thesis's loop instead of the tracking session (as gabarit track --plain)"},
-       {"--motion-filter", "", "with --plain: the motion filter (default on, as gabarit track)"},
-       {"--refine", "", "with --plain: sub-cell x, y, theta (default on)"},
-       {"--recover", "", "with --plain: once lost, search around the last confident pose (default on)"},
-       {"--no-focus-stack", "", "ignore the table's model images (depth from the stencils only)"},
        {"--frames", "N", "stop after N tracked frames (default: run until signalled)"},
        {"--frame-timeout-ms", "MS", "report a stall after MS without a frame (default 2000)"},
        {"--reopen-min-ms", "MS", "wait after losing the device before reopening it; doubles per failed attempt (default 250)"},
@@ -119,6 +114,7 @@ Config parse(int argc, char** argv, bool& help_shown) {
        {"--frame-crc", "", "append the CRC-32 of each tracked frame's luma (width x height bytes, row by row):\n"
         "                          which frame was tracked, for tests that replay a recording through a camera"},
        {"--quiet", "", "no progress lines on stderr"}});
+  for (app::Option& o : app::session_option_group()) args.add(std::move(o));  // as gabarit track
   std::vector<std::string> list(argv + 1, argv + argc);
   help_shown = !args.parse(list);
   Config c;
@@ -169,9 +165,8 @@ Config parse(int argc, char** argv, bool& help_shown) {
   c.start_stopped = args.has("--start-stopped");
   if (c.start_stopped && c.gpio.trigger_line < 0) throw app::UsageError("--start-stopped needs --trigger-line");
   c.frame_crc = args.has("--frame-crc");
-  c.session = app::session_options(args.has("--plain"), args.has("--motion-filter"), args.has("--refine"), args.has("--recover"));
-  c.focus_stack = !args.has("--plain") && !args.has("--no-focus-stack");
-  c.plain = args.has("--plain");
+  c.profile = app::read_session_profile(args);
+  if (args.has("--save-profile")) app::write_file(args.get("--save-profile"), app::format_profile(c.profile));
   c.quiet = args.has("--quiet");
   return c;
 }
@@ -196,24 +191,25 @@ std::uint64_t monotonic_us() {
   return static_cast<std::uint64_t>(t.tv_sec) * 1000000u + static_cast<std::uint64_t>(t.tv_nsec) / 1000u;
 }
 
+// What the board adds to its profile: the voter and the detector it was told.
+app::SessionExtras extras(const Config& c) {
+  app::SessionExtras e;
+  e.voter = c.voter;
+  if (c.binary) e.detector = Detector{table_format::DetectorKind::kBinary, 0};
+  return e;
+}
+
 class Board : private board::BoardLink::Handler {
  public:
   Board(const Config& c, const TableView& table, std::uint32_t table_crc, std::uint32_t table_bytes, int signal_fd)
       : c_(c),
         table_crc_(table_crc),
         table_bytes_(table_bytes),
-        has_model_images_(table.has_model_images()),
         signal_fd_(signal_fd),
-        // As gabarit track: the recovery search detects features once per search.
-        buffers_(table, nullptr, c.voter, c.session.recover),
-        session_(table, nullptr, c.binary ? Detector{table_format::DetectorKind::kBinary, 0} : detector_of(table)),
-        stack_(table),
+        session_(table, c.profile, extras(c)),
         running_(!c.start_stopped) {
-    if (!c.init_text.empty() &&
-        session_.start(c.session, app::parse_init_pose(c.init_text, table, "--init")) != Status::kOk)
+    if (!c.init_text.empty() && !session_.start(app::parse_init_pose(c.init_text, table, "--init")))
       throw app::UsageError("--init: not a usable starting pose");
-    session_started_ = !c.init_text.empty();
-    if (c.focus_stack) session_.use_focus_stack(stack_.get());
   }
 
   int run() {
@@ -345,9 +341,7 @@ class Board : private board::BoardLink::Handler {
     caps.clock_hz = 1000000;  // CLOCK_MONOTONIC in microseconds, as V4L2's timestamps
     caps.frame_slots = 1;
     caps.max_frame_bytes = 0;  // frames come from the camera, not the link
-    caps.mode = (!c_.plain ? link::kModeSession : 0u) |
-                (buffers_.shares_search_features() ? link::kModeSharedSearch : 0u) |
-                (c_.focus_stack && has_model_images_ ? link::kModeFocusStack : 0u);
+    caps.mode = session_.mode();
     caps.boot_count = 0;
     caps.device_id = device_id();
     link::set_text(caps.kind, "linux-board");
@@ -355,8 +349,7 @@ class Board : private board::BoardLink::Handler {
     link::set_text(caps.firmware, "gabarit-board");
     if (hello.version != link::kVersion) return link::Refusal::kProtocolVersion;
     if (hello.table_crc != 0 && hello.table_crc != table_crc_) return link::Refusal::kTableMismatch;
-    if (session_.start(c_.session, hello.initial) != Status::kOk) return link::Refusal::kBadPose;
-    session_started_ = true;
+    if (!session_.start(hello.initial)) return link::Refusal::kBadPose;
     have_last_crc_ = false;
     progress("run %u started by the host at %.2f,%.2f", hello.run_id, static_cast<double>(hello.initial.x),
              static_cast<double>(hello.initial.y));
@@ -436,7 +429,7 @@ class Board : private board::BoardLink::Handler {
       }
       ++delivered_;
       count_delivered(frame.sequence);
-      if (running_ && session_started_ && (!c_.usb || link_.running())) process(frame);
+      if (running_ && session_.started() && (!c_.usb || link_.running())) process(frame);
       else if (c_.skip_repeats) note_captured(frame);  // a frame shown before the run: not new when it starts
       if (!capture_.requeue(frame.index)) {
         device_lost(capture_.error());
@@ -498,7 +491,7 @@ class Board : private board::BoardLink::Handler {
     app::TrackRow row;
     row.frame = static_cast<std::uint32_t>(tracked_);
     SessionResult result;
-    if (const Status s = session_.step(image, buffers_.scratch(), result); s != Status::kOk) {
+    if (const Status s = session_.step(image, result); s != Status::kOk) {
       ++bad_frames_;
       progress("frame %u not tracked: %s", frame.sequence, status_name(s));
       return;
@@ -531,18 +524,14 @@ class Board : private board::BoardLink::Handler {
 
   const Config& c_;
   std::uint32_t table_crc_, table_bytes_;
-  bool has_model_images_;
   int signal_fd_;
-  app::SessionBuffers buffers_;
-  TrackingSession session_;
-  app::TableFocusStack stack_;
+  app::HostedSession session_;
   board::V4l2Capture capture_;
   board::GpioLines gpio_;
   board::UdpSender udp_;
   board::FrameCounter counter_;
   board::UsbGadget gadget_;
   board::BoardLink link_{gadget_};
-  bool session_started_ = false;
   bool counter_started_ = false;
   std::uint32_t last_sequence_ = 0;
   std::uint32_t last_crc_ = 0;  // the last frame tracked

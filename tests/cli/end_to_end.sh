@@ -215,6 +215,19 @@ grep -q '"reacquired_after_frames": \[[0-9]' "$s/accc.json" || fail "--search-in
 expect 2 "--search-interval" $g track --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init" --recover --search-interval 0
 expect 2 "--screen-stride" $g track --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init" --recover --screen-stride 17
 expect 2 "--search-budget" $g track --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init" --recover --search-budget 559
+# The session profile: --save-profile writes what the options describe, and
+# --profile reads it back to the same poses; a bad file names its line.
+$g track --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init" --recovery detect --search-interval 2 \
+  --save-profile "$s/run.profile" -o "$s/pp1.csv" 2>/dev/null || fail "track --save-profile"
+grep -qx "gabarit-session-profile 1" <(head -1 "$s/run.profile") || fail "--save-profile: no header: $(cat "$s/run.profile")"
+grep -qx "recovery = detect" "$s/run.profile" && grep -qx "search-interval = 2" "$s/run.profile" || fail "--save-profile: $(cat "$s/run.profile")"
+$g track --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init" --profile "$s/run.profile" -o "$s/pp2.csv" 2>/dev/null \
+  || fail "track --profile"
+cmp -s "$s/pp1.csv" "$s/pp2.csv" || fail "--profile of a saved profile does not give the same poses"
+printf 'gabarit-session-profile 1\nrecovery = sideways\n' > "$s/bad.profile"
+expect 1 "bad.profile:2: recovery 'sideways'" $g track --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init" --profile "$s/bad.profile"
+expect 2 "is also an input" $g track --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init" --profile "$s/run.profile" \
+  --save-profile "$s/run.profile"
 expect 2 "applies to --scene" $g synth --shape curve --depths 3 -o "$work/x"
 expect 2 "one of --shape, --scene, --suite and --pipette-suite" $g synth -o "$work/x"
 expect 2 "--translations" $g tables build --model "$s/model_00.pgm" --x 0:0:1 --y 0:0:1 --translations middle -o "$work/x.gbt"

@@ -10,7 +10,7 @@ seeds=${2:?}
 out=${3:?}
 link_seeds=${4:?}
 rm -rf "$out"
-mkdir -p "$out"/{table,y4m,pgm,points_csv,pose_csv,link,board_map}
+mkdir -p "$out"/{table,y4m,pgm,points_csv,pose_csv,link,board_map,session_profile}
 "$link_seeds" "$out/link"
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
@@ -36,4 +36,10 @@ printf '10;20\n' > "$out/points_csv/semicolon.csv"
 printf 'frame,x,y,theta_deg,depth,visible\n0,1.5,2,0,0,1\n1,nan,2,0,0,0\n4294967296,1,1,0,0,1\n' > "$out/pose_csv/bad.csv"
 cp "$(dirname "$0")"/../../hil/boards/*.yaml "$out/board_map/"
 printf 'name: b\nrelay: x\ngpio:\n  lock: 99999\n' > "$out/board_map/bad-line.yaml"
+# Session profiles: every key (gabarit track --save-profile), a short one, refusals.
+"$g" track --table "$work/bin.gbt" --frames "$work/bin/frames.y4m" --init 12,10 --recovery detect --detect-after 3 \
+    --save-profile "$out/session_profile/detect.profile" -o "$work/p2.csv" 2> /dev/null
+printf 'gabarit-session-profile 1\n# tuned\nplain = true\nrecover = true\nsearch-budget = 40\n' > "$out/session_profile/short.profile"
+printf 'gabarit-session-profile 1\nplain = true\nrecovery = particle\n' > "$out/session_profile/needs-recovery.profile"
+printf 'gabarit-session-profile 1\nwithout = modes,all\nseed = 18446744073709551615\n' > "$out/session_profile/bad-seed.profile"
 echo "make_corpora: $(find "$out" -type f | wc -l) seeds in $out"

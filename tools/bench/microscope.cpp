@@ -139,9 +139,9 @@ void accuracy_table(const Scene& sc, const std::string& dir, std::ostringstream&
   const auto track = [&](const std::string& name, const SessionOptions& session, const TableView& with,
                          bool focus_stack = false, bool shared_search_features = true) {
     host::TrackingOptions options;
-    options.session = session;
-    options.shared_search_features = shared_search_features;
-    if (focus_stack) options.focus_stack = model_images;
+    options.extras.research_options = session;
+    options.profile.shared_search = shared_search_features;
+    if (focus_stack) options.extras.focus_stack = model_images;
     Run r{name, {}, 0, {}};
     MemoryFrames src(frames);
     double total = 0;
@@ -315,7 +315,7 @@ void other_scenes_table(const Scene& sc, const std::string& dir, std::ostringstr
     const auto other_truth = host::read_pose_csv((fs::path(other_dir) / "gt.csv").string());
     const std::vector<std::string> paths = scene_model_paths(other_dir, other.depths);
     host::TrackingOptions options;
-    for (const std::string& path : paths) options.focus_stack.push_back(app::read_pgm(path));
+    for (const std::string& path : paths) options.extras.focus_stack.push_back(app::read_pgm(path));
     host::ImageModelOptions canny_seed;
     canny_seed.canny = true;
     const std::vector<std::byte> bytes = host::build_table(host::model_from_images(paths, canny_seed), bo);
@@ -324,7 +324,7 @@ void other_scenes_table(const Scene& sc, const std::string& dir, std::ostringstr
     const Pose start{static_cast<float>(other_truth[0].x), static_cast<float>(other_truth[0].y),
                      static_cast<float>(other_truth[0].theta_deg), static_cast<std::uint16_t>(other_truth[0].depth)};
     for (const bool cheaper : {false, true}) {
-      options.session = cheaper ? cheap : SessionOptions{};
+      options.extras.research_options = cheaper ? cheap : SessionOptions{};
       Run r{"seed " + std::to_string(seed), {}, 0, {}};
       std::size_t lost = 0;
       MemoryFrames src(other_frames);
@@ -396,7 +396,7 @@ void two_threads_table(const Scene& sc, std::ostringstream& md) {
   // The whole plain loop (features, vote, pose) with the vote on 1 and 2 threads.
   const auto loop_us = [&](unsigned threads) {
     host::TrackingOptions o;
-    o.voter = app::VoterChoice::kCsr;
+    o.extras.voter = app::VoterChoice::kCsr;
     o.threads = threads;
     MemoryFrames src(frames);
     double total = 0;

@@ -14,7 +14,7 @@
 #include "gabarit/app/scratch.hpp"
 #include "gabarit/host/evaluation.hpp"
 #include "gabarit/host/model.hpp"
-#include "gabarit/host/particle_run.hpp"
+#include "gabarit/app/particle_run.hpp"
 #include "gabarit/host/scene_synth.hpp"
 #include "gabarit/host/table_builder.hpp"
 #include "gabarit/host/tracking_run.hpp"
@@ -37,7 +37,7 @@ struct Method {
   bool canny;        // table detector: Canny, else the thesis's custom edges (gradient rows)
   bool session;      // the motion model (default session), else the plain loop
   bool particle;     // the particle filter instead
-  host::ParticleMeasureKind measure;
+  app::ParticleMeasureKind measure;
   bool particle_recovery = false;  // the session re-acquiring with the particle filter
 };
 const Method kMethods[] = {
@@ -45,8 +45,8 @@ const Method kMethods[] = {
     {"custom edges, motion model (default session)", false, true, false, {}},
     {"Canny, no motion model (plain loop)", true, false, false, {}},
     {"Canny, motion model (default session)", true, true, false, {}},
-    {"particle filter, edge measure (Canny)", true, false, true, host::ParticleMeasureKind::kEdges},
-    {"particle filter, stencil measure (Canny table)", true, false, true, host::ParticleMeasureKind::kStencil},
+    {"particle filter, edge measure (Canny)", true, false, true, app::ParticleMeasureKind::kEdges},
+    {"particle filter, stencil measure (Canny table)", true, false, true, app::ParticleMeasureKind::kStencil},
     {"Canny, motion model, particle re-acquisition", true, true, false, {}, true},
 };
 constexpr std::size_t kMethodCount = sizeof kMethods / sizeof kMethods[0];
@@ -207,16 +207,15 @@ int run_pipette(const PipetteOptions& o) {
       };
       MemoryFrames src(images);
       if (method.particle) {
-        host::ParticleRunOptions po;
+        app::ParticleRunOptions po;
         po.particles = o.particles;
         po.measure = method.measure;
-        po.finer = method.measure == host::ParticleMeasureKind::kEdges;  // as gabarit track --measure stencil
-        host::run_particle_tracking(table, src, init, po, on_row);
+        po.finer = method.measure == app::ParticleMeasureKind::kEdges;  // as gabarit track --measure stencil
+        app::run_particle_tracking(table, src, init, po, on_row);
       } else {
         host::TrackingOptions to;
-        to.session = method.session ? SessionOptions{} : kPlainSession;
-        to.table_focus_stack = method.session;
-        to.particle_recovery = method.particle_recovery;
+        to.profile = method.session ? app::SessionProfile{} : app::plain_profile();
+        if (method.particle_recovery) to.profile.recovery = app::RecoveryKind::kParticles;
         host::run_tracking(table, src, init, to, on_row);
       }
       const Tally t = score(poses, truth, micros);

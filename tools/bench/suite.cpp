@@ -13,7 +13,7 @@
 #include "gabarit/host/detection_run.hpp"
 #include "gabarit/host/evaluation.hpp"
 #include "gabarit/host/model.hpp"
-#include "gabarit/host/particle_run.hpp"
+#include "gabarit/app/particle_run.hpp"
 #include "gabarit/host/scene_synth.hpp"
 #include "gabarit/host/table_builder.hpp"
 #include "gabarit/host/tracking_run.hpp"
@@ -200,11 +200,10 @@ SceneResult run_scene(std::uint32_t index, std::uint32_t frames_per_scene, const
   // particles) of gabarit track --recovery particle.
   const auto session_run = [&](bool robust, bool particle_recovery, const char* name, bool detection_recovery = false) {
     host::TrackingOptions options;
-    options.detection_recovery = detection_recovery;
-    options.session = robust ? SessionOptions{} : kPlainSession;
-    if (detection_recovery) options.session.recovery.detect_after = detect_after;
-    options.table_focus_stack = robust;
-    options.particle_recovery = particle_recovery;
+    options.profile = robust ? app::SessionProfile{} : app::plain_profile();
+    if (detection_recovery) options.profile.recovery = app::RecoveryKind::kDetection;
+    if (detection_recovery) options.profile.detect_after = detect_after;
+    if (particle_recovery) options.profile.recovery = app::RecoveryKind::kParticles;
     std::vector<host::PoseSample> poses;
     std::vector<double> micros, lost_micros;
     MemoryFrames src(frames);
@@ -261,7 +260,7 @@ SceneResult run_scene(std::uint32_t index, std::uint32_t frames_per_scene, const
     std::vector<host::PoseSample> poses;
     std::vector<double> micros;
     MemoryFrames src(frames);
-    host::run_particle_tracking(table, src, init, host::ParticleRunOptions{}, [&](const app::TrackRow& row) {
+    app::run_particle_tracking(table, src, init, app::ParticleRunOptions{}, [&](const app::TrackRow& row) {
       poses.push_back({row.frame, row.step.pose.x, row.step.pose.y, row.step.pose.theta_deg, row.step.pose.depth, true});
       micros.push_back(row.micros);
     });

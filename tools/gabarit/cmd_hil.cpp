@@ -10,6 +10,7 @@
 #include "gabarit/app/error.hpp"
 #include "gabarit/app/files.hpp"
 #include "gabarit/app/image_io.hpp"
+#include "gabarit/app/session_profile_io.hpp"
 #include "gabarit/hil/board_map.hpp"
 #include "gabarit/hil/dut.hpp"
 #include "gabarit/hil/harness.hpp"
@@ -90,6 +91,7 @@ int hil(const std::vector<std::string>& argv) {
                        "                          host's and the DUT's resident memory and the latency every --soak-window frames"},
        {"--soak-window", "F", "with --soak: frames per sample (default 1000)"},
        {"--plain", "", "inprocess: the thesis's loop instead of the session defaults"},
+       {"--profile", "FILE", "inprocess: the session profile the device runs (docs/file-formats.md)"},
        {"--link", "loopback|udp", "inprocess: the link (default loopback; udp: two sockets on 127.0.0.1)"},
        {"--slots", "N", "inprocess: frames the DUT queues, 1..8 (default 4)"},
        {"--firmware", "ELF", "cortex-m: the HIL firmware (build/cortex-m7/platform/cortex-m/gabarit-firmware-hil.elf)"},
@@ -113,6 +115,7 @@ int hil(const std::vector<std::string>& argv) {
     if (args.has(option) && kind != dut) throw app::UsageError(std::string(option) + " applies to --dut " + dut);
   };
   dut_only("--plain", "inprocess");
+  dut_only("--profile", "inprocess");
   dut_only("--link", "inprocess");
   dut_only("--slots", "inprocess");
   dut_only("--firmware", "cortex-m");
@@ -152,7 +155,8 @@ int hil(const std::vector<std::string>& argv) {
   if (kind == "inprocess") {
     hil::InprocessOptions o;
     o.table_path = table;
-    o.plain = args.has("--plain");
+    if (args.has("--profile")) o.profile = app::read_profile(args.get("--profile"));
+    if (args.has("--plain")) o.profile = app::plain_profile();
     o.frame_slots = static_cast<std::uint32_t>(args.integer("--slots", 4, 1, 8));
     const std::string link = args.get_or("--link", "loopback");
     if (link != "loopback" && link != "udp") throw app::UsageError("--link '" + link + "': want loopback or udp");

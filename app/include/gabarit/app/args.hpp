@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <map>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "gabarit/app/error.hpp"
@@ -33,6 +34,10 @@ class Args {
  public:
   Args(std::string command, std::string synopsis, std::string description, std::vector<Option> options,
        std::string positional_name = {});
+
+  // Declares one more option (an option group shared by several programs,
+  // such as session_profile_io.hpp's), before parse().
+  void add(Option option) { options_.push_back(std::move(option)); }
 
   // Returns false after printing help (the caller exits 0).
   bool parse(const std::vector<std::string>& argv);

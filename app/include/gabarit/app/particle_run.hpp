@@ -13,12 +13,13 @@
 #include "gabarit/app/image_io.hpp"
 #include "gabarit/app/pose_row.hpp"
 #include "gabarit/app/scratch.hpp"
+#include "gabarit/app/session_profile.hpp"
 #include "gabarit/particle_filter.hpp"
 #include "gabarit/particle_measures.hpp"
 #include "gabarit/particle_recovery.hpp"
 #include "gabarit/table_view.hpp"
 
-namespace gabarit::host {
+namespace gabarit::app {
 
 enum class ParticleMeasureKind : std::uint8_t {
   kEdges,    // edge correlation (thesis 3.4.3): every edge_stride-th model point, within edge_tolerance px of an edge
@@ -41,10 +42,9 @@ struct ParticleRunOptions {
   app::VoterChoice voter = app::VoterChoice::kAuto;  // the stencil measure's vote
 };
 
-// Switches off the improvements a comma-separated list names (modes,
-// disambiguation, narrowing, kinematics, reinit, mode-filter, velocity; all:
-// plain CONDENSATION). Throws app::UsageError naming `option` for another word.
-void switch_off_improvements(const std::string& list, ParticleFilterOptions& options, const char* option);
+// The profile's particle numbers (particles, seed, the edge measure's stride
+// and tolerance, the improvements switched off) over the defaults above.
+ParticleRunOptions particle_run_options(const SessionProfile& profile);
 
 // A particle filter with its buffers, for frames of at most max_width x max_height.
 class ParticleTracker {
@@ -71,4 +71,4 @@ class ParticleTracker {
 void run_particle_tracking(const TableView& table, app::FrameSource& frames, const Pose& init, const ParticleRunOptions& options,
                            const std::function<void(const app::TrackRow&)>& on_row);
 
-}  // namespace gabarit::host
+}  // namespace gabarit::app

@@ -78,12 +78,6 @@ class FinderBuffers {
   std::vector<FinderCandidate> candidates_;
 };
 
-// The session a program runs: the defaults (SessionOptions{}), or with
-// `plain` the thesis's loop (kPlainSession) with only the parts asked for
-// added, the motion filter bringing its own defaults. gabarit track and
-// gabarit-board read --plain, --motion-filter, --refine, --recover into it.
-SessionOptions session_options(bool plain, bool motion_filter, bool refine, bool recover);
-
 // The focus stack a table carries (format 1.1: the model images it was built
 // from), as TrackingSession::use_focus_stack takes it. get() is null for a
 // table without images. The table must outlive it; it is not copyable (the

@@ -90,10 +90,19 @@ Status decode_message(std::span<const std::byte> in, Header& header, std::span<c
 inline constexpr std::uint32_t kNoFrame = 0xFFFFFFFFu;
 
 // Tracker modes a DUT runs (CAPS.mode bits), so the harness's reference
-// runs the same loop.
+// runs the same loop: the session profile's choices (app/session_profile.hpp,
+// mode_bits and profile_from_mode_bits, the one place that writes and reads them).
 inline constexpr std::uint32_t kModeSession = 1u << 0;       // TrackingSession defaults; else the thesis's loop
 inline constexpr std::uint32_t kModeSharedSearch = 1u << 1;  // the recovery search detects once per frame
 inline constexpr std::uint32_t kModeFocusStack = 1u << 2;    // depth by intensity with the table's model images
+// Protocol 1.2: the rest of the profile.
+inline constexpr std::uint32_t kModeMotionFilter = 1u << 3;        // the thesis's loop with the motion filter added
+inline constexpr std::uint32_t kModeRefine = 1u << 4;              // ... with sub-cell refinement added
+inline constexpr std::uint32_t kModeRecover = 1u << 5;             // ... with recovery added
+inline constexpr std::uint32_t kModeRecoveryDetection = 1u << 6;   // re-acquisition by detection over the frame
+inline constexpr std::uint32_t kModeRecoveryParticles = 1u << 7;   // re-acquisition by a particle filter
+inline constexpr std::uint32_t kModeSubCellAlignment = 1u << 8;    // sub-cell by feature alignment, not the parabola
+inline constexpr std::uint32_t kModeTuned = 1u << 31;              // numbers other than the defaults: not mirrored
 
 struct Hello {
   std::uint16_t version = kVersion;

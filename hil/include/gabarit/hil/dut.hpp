@@ -11,6 +11,7 @@
 #include <thread>
 #include <vector>
 
+#include "gabarit/app/session_profile.hpp"
 #include "gabarit/hil/transport.hpp"
 
 namespace gabarit::hil {
@@ -40,7 +41,7 @@ class DutDriver {
 
 struct InprocessOptions {
   std::string table_path;
-  bool plain = false;           // the thesis's loop instead of the session defaults
+  app::SessionProfile profile;  // what the device runs (the session's defaults unless told)
   std::uint32_t frame_slots = 4;
   std::uint16_t max_payload = 16384;
   bool udp = false;             // two UDP sockets on 127.0.0.1 instead of the loopback

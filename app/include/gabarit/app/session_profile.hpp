@@ -1,0 +1,109 @@
+// The session profile: every choice that changes what a tracking session
+// outputs, in one value that every program builds its session from (gabarit
+// track, the board application, the HIL's in-process device and its
+// reference, the Cortex-M firmware). It maps the choices to the kernel's
+// SessionOptions, is validated once, travels on the HIL link as CAPS mode
+// bits (so the harness's reference runs what the device runs), and is saved
+// as a small text file (session_profile_io.hpp, docs/file-formats.md).
+//
+// Kernel-grade (no heap, no exceptions): the firmware holds its profile as a
+// constant and sizes its static buffers for it.
+#pragma once
+
+#include <cstdint>
+
+#include "gabarit/particle_filter.hpp"
+#include "gabarit/status.hpp"
+#include "gabarit/tracking_session.hpp"
+
+namespace gabarit::app {
+
+// How a lost target is re-acquired (with recovery on).
+enum class RecoveryKind : std::uint8_t {
+  kGrid = 0,       // the grid search around where it was last seen (recovery_search.hpp)
+  kDetection = 1,  // detection over the whole frame after detect_after lost frames (model_finder.hpp)
+  kParticles = 2,  // a particle filter over the whole frame (particle_recovery.hpp)
+};
+// How refinement places the pose within the cell (SessionOptions::align_features).
+enum class SubCellKind : std::uint8_t { kParabola = 0, kAlignment = 1 };
+
+// The particle filter's improvements a profile may switch off (bits of
+// SessionProfile::particle_improvements_off); kAllImprovements: plain
+// CONDENSATION (plain_condensation()).
+inline constexpr std::uint32_t kImproveModes = 1u << 0;
+inline constexpr std::uint32_t kImproveDisambiguation = 1u << 1;
+inline constexpr std::uint32_t kImproveNarrowing = 1u << 2;
+inline constexpr std::uint32_t kImproveKinematics = 1u << 3;
+inline constexpr std::uint32_t kImproveReinit = 1u << 4;
+inline constexpr std::uint32_t kImproveModeFilter = 1u << 5;
+inline constexpr std::uint32_t kImproveVelocity = 1u << 6;
+inline constexpr std::uint32_t kAllImprovements = 1u << 7;
+inline constexpr std::uint32_t kKnownImprovements = (1u << 8) - 1;
+// The filter's options with the improvements in `off` switched off.
+ParticleFilterOptions particle_filter_options(std::uint32_t off) noexcept;
+
+struct SessionProfile {
+  // The base: the tracking session's defaults (SessionOptions{}), or with
+  // `plain` the thesis's loop (kPlainSession) with only the parts below added.
+  bool plain = false;
+  bool motion_filter = false;  // with plain: the motion filter, with its own defaults
+  bool refine = false;         // with plain: sub-cell refinement
+  bool recover = false;        // with plain: recovery once lost
+  RecoveryKind recovery = RecoveryKind::kGrid;
+  SubCellKind subcell = SubCellKind::kParabola;
+  // The grid search detects features once per lost frame (SessionScratch::
+  // search_features); false: a full track_step per placement.
+  bool shared_search = true;
+  // Without plain: depth and angle by intensity with the model images the
+  // table carries (format 1.1), when it has them.
+  bool focus_stack = true;
+  // The recovery search (RecoveryOptions): grid placements beyond the nearest
+  // 9 per search (0: all), every n-th lost frame, every n-th feature screens a
+  // placement; detection recovery after this many lost frames.
+  std::uint32_t search_budget = 0;
+  std::uint32_t search_interval = 1;
+  std::uint32_t screen_stride = 2;
+  std::uint32_t detect_after = 2;
+  // Particle recovery: the filter's size, seed, edge measure and improvements.
+  std::uint32_t particles = 1000;
+  std::uint64_t seed = 1;
+  std::uint32_t edge_stride = 2;
+  std::uint32_t edge_tolerance = 0;
+  std::uint32_t particle_improvements_off = 0;
+
+  bool operator==(const SessionProfile&) const = default;
+};
+
+// The thesis's loop: track_step frame after frame, nothing added.
+inline constexpr SessionProfile plain_profile() noexcept {
+  SessionProfile p;
+  p.plain = true;
+  return p;
+}
+
+// kInvalidArgument for a profile no session can run: numbers out of the
+// documented ranges (search_budget <= kSearchPlacementCount - kSearchNear, search_interval
+// 1..100, screen_stride 1..16, detect_after <= 1000, particles 1..10^6,
+// edge_stride 1..64, edge_tolerance 0..3, known improvement bits), a
+// recovery kind other than the grid without recovery, an alignment subcell
+// without refinement.
+[[nodiscard]] Status validate(const SessionProfile& profile) noexcept;
+
+// The kernel's options for the profile (its recovery numbers included).
+SessionOptions session_options(const SessionProfile& profile) noexcept;
+// Whether a session runs the recovery, refinement, the table's focus stack.
+inline bool recovers(const SessionProfile& p) noexcept { return !p.plain || p.recover; }
+inline bool refines(const SessionProfile& p) noexcept { return !p.plain || p.refine; }
+inline bool uses_table_focus_stack(const SessionProfile& p) noexcept { return !p.plain && p.focus_stack; }
+
+// The HIL link's form (CAPS.mode, link/protocol.hpp's kMode* bits): a device
+// reports the profile it runs, as the choices take effect on its table
+// (`shares_search`: its scratch shares the search's features; `has_stack`:
+// it uses the table's focus stack), and the harness's reference runs
+// profile_from_mode_bits of it. The numbers (budget, interval, stride,
+// detect_after, the particle filter's) do not travel: a profile whose numbers
+// differ from the defaults sets kModeTuned, and the harness refuses it.
+std::uint32_t mode_bits(const SessionProfile& profile, bool shares_search, bool has_stack) noexcept;
+SessionProfile profile_from_mode_bits(std::uint32_t bits) noexcept;
+
+}  // namespace gabarit::app

@@ -1,0 +1,98 @@
+#include "gabarit/app/session_profile.hpp"
+
+#include "gabarit/link/protocol.hpp"
+#include "gabarit/recovery_search.hpp"
+
+namespace gabarit::app {
+
+ParticleFilterOptions particle_filter_options(std::uint32_t off) noexcept {
+  ParticleFilterOptions o = (off & kAllImprovements) != 0 ? plain_condensation() : ParticleFilterOptions{};
+  if ((off & kImproveModes) != 0) o.modes = false;
+  if ((off & kImproveDisambiguation) != 0) o.disambiguate = false;
+  if ((off & kImproveNarrowing) != 0) o.narrow_spread = false;
+  if ((off & kImproveKinematics) != 0) o.kinematic_weighting = false;
+  if ((off & kImproveReinit) != 0) o.partial_reinit = false;
+  if ((off & kImproveModeFilter) != 0) o.mode_filter = false;
+  if ((off & kImproveVelocity) != 0) o.constant_velocity = false;
+  return o;
+}
+
+Status validate(const SessionProfile& p) noexcept {
+  const auto within = [](std::uint64_t v, std::uint64_t lo, std::uint64_t hi) { return v >= lo && v <= hi; };
+  const bool numbers = within(p.search_budget, 0, kSearchPlacementCount - kSearchNear) && within(p.search_interval, 1, 100) &&
+                       within(p.screen_stride, 1, 16) && within(p.detect_after, 0, 1000) &&
+                       within(p.particles, 1, 1000000) && within(p.edge_stride, 1, 64) && within(p.edge_tolerance, 0, 3) &&
+                       (p.particle_improvements_off & ~kKnownImprovements) == 0;
+  const bool kinds = static_cast<std::uint8_t>(p.recovery) <= static_cast<std::uint8_t>(RecoveryKind::kParticles) &&
+                     static_cast<std::uint8_t>(p.subcell) <= static_cast<std::uint8_t>(SubCellKind::kAlignment);
+  const bool parts = (p.plain || (!p.motion_filter && !p.refine && !p.recover)) &&
+                     (p.recovery == RecoveryKind::kGrid || recovers(p)) &&
+                     (p.subcell == SubCellKind::kParabola || refines(p));
+  return numbers && kinds && parts ? Status::kOk : Status::kInvalidArgument;
+}
+
+SessionOptions session_options(const SessionProfile& p) noexcept {
+  SessionOptions o;
+  if (p.plain) {
+    const SessionOptions defaults;
+    o = kPlainSession;
+    o.motion_filter = p.motion_filter;
+    o.refine = p.refine;
+    o.recover = p.recover;
+    if (p.motion_filter) {  // the motion filter brings its own defaults
+      o.vote_at_last_pose = defaults.vote_at_last_pose;
+      o.follow_when_unsure = defaults.follow_when_unsure;
+      o.theta_observability = defaults.theta_observability;
+    }
+  }
+  o.align_features = p.subcell == SubCellKind::kAlignment;
+  o.recovery.budget = p.search_budget;
+  o.recovery.interval = p.search_interval;
+  o.recovery.screen_stride = p.screen_stride;
+  o.recovery.detect_after = p.detect_after;
+  return o;
+}
+
+namespace {
+
+// The profile's numbers are the defaults (they do not travel in CAPS).
+bool default_numbers(const SessionProfile& p) noexcept {
+  const SessionProfile d;
+  return p.search_budget == d.search_budget && p.search_interval == d.search_interval &&
+         p.screen_stride == d.screen_stride && p.detect_after == d.detect_after && p.particles == d.particles &&
+         p.seed == d.seed && p.edge_stride == d.edge_stride && p.edge_tolerance == d.edge_tolerance &&
+         p.particle_improvements_off == d.particle_improvements_off;
+}
+
+}  // namespace
+
+std::uint32_t mode_bits(const SessionProfile& p, bool shares_search, bool has_stack) noexcept {
+  std::uint32_t bits = 0;
+  if (!p.plain) bits |= link::kModeSession;
+  if (recovers(p) && p.shared_search && shares_search) bits |= link::kModeSharedSearch;
+  if (uses_table_focus_stack(p) && has_stack) bits |= link::kModeFocusStack;
+  if (p.plain && p.motion_filter) bits |= link::kModeMotionFilter;
+  if (p.plain && p.refine) bits |= link::kModeRefine;
+  if (p.plain && p.recover) bits |= link::kModeRecover;
+  if (p.recovery == RecoveryKind::kDetection) bits |= link::kModeRecoveryDetection;
+  if (p.recovery == RecoveryKind::kParticles) bits |= link::kModeRecoveryParticles;
+  if (p.subcell == SubCellKind::kAlignment) bits |= link::kModeSubCellAlignment;
+  if (!default_numbers(p)) bits |= link::kModeTuned;
+  return bits;
+}
+
+SessionProfile profile_from_mode_bits(std::uint32_t bits) noexcept {
+  SessionProfile p;
+  p.plain = (bits & link::kModeSession) == 0;
+  p.shared_search = (bits & link::kModeSharedSearch) != 0;
+  p.focus_stack = (bits & link::kModeFocusStack) != 0;
+  p.motion_filter = p.plain && (bits & link::kModeMotionFilter) != 0;
+  p.refine = p.plain && (bits & link::kModeRefine) != 0;
+  p.recover = p.plain && (bits & link::kModeRecover) != 0;
+  if ((bits & link::kModeRecoveryDetection) != 0) p.recovery = RecoveryKind::kDetection;
+  if ((bits & link::kModeRecoveryParticles) != 0) p.recovery = RecoveryKind::kParticles;
+  if ((bits & link::kModeSubCellAlignment) != 0) p.subcell = SubCellKind::kAlignment;
+  return p;
+}
+
+}  // namespace gabarit::app

@@ -1,0 +1,302 @@
+#include "gabarit/app/session_profile_io.hpp"
+
+#include <algorithm>
+#include <charconv>
+#include <limits>
+#include <set>
+
+#include "gabarit/app/error.hpp"
+#include "gabarit/app/files.hpp"
+
+namespace gabarit::app {
+
+namespace {
+
+struct ImprovementName {
+  const char* word;
+  std::uint32_t bit;
+};
+constexpr ImprovementName kImprovementNames[] = {
+    {"modes", kImproveModes},         {"disambiguation", kImproveDisambiguation}, {"narrowing", kImproveNarrowing},
+    {"kinematics", kImproveKinematics}, {"reinit", kImproveReinit},               {"mode-filter", kImproveModeFilter},
+    {"velocity", kImproveVelocity},   {"all", kAllImprovements}};
+
+const char* recovery_name(RecoveryKind kind) {
+  switch (kind) {
+    case RecoveryKind::kGrid: return "grid";
+    case RecoveryKind::kDetection: return "detect";
+    case RecoveryKind::kParticles: return "particle";
+  }
+  return "grid";
+}
+
+RecoveryKind parse_recovery(const std::string& text, const std::string& what) {
+  if (text == "grid") return RecoveryKind::kGrid;
+  if (text == "detect") return RecoveryKind::kDetection;
+  if (text == "particle") return RecoveryKind::kParticles;
+  throw UsageError(what + " '" + text + "': want grid, detect or particle");
+}
+
+SubCellKind parse_subcell(const std::string& text, const std::string& what) {
+  if (text == "parabola") return SubCellKind::kParabola;
+  if (text == "alignment") return SubCellKind::kAlignment;
+  throw UsageError(what + " '" + text + "': want parabola or alignment");
+}
+
+bool parse_bool(const std::string& text, const std::string& what) {
+  if (text == "true") return true;
+  if (text == "false") return false;
+  throw UsageError(what + " '" + text + "': want true or false");
+}
+
+std::uint64_t parse_count(const std::string& text, const std::string& what, std::uint64_t lo, std::uint64_t hi) {
+  std::uint64_t v = 0;
+  const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), v);
+  if (ec != std::errc() || end != text.data() + text.size() || text.empty() || v < lo || v > hi) {
+    throw UsageError(what + " '" + text + "': want an integer in " + std::to_string(lo) + ".." + std::to_string(hi));
+  }
+  return v;
+}
+
+// One key of the profile: its name (the option's, without the dashes), how
+// it is written and how it is read. The text file and the command line read
+// values through the same `set`, so their ranges cannot drift apart.
+struct Key {
+  const char* name;
+  std::string (*get)(const SessionProfile&);
+  void (*set)(SessionProfile&, const std::string& value, const std::string& what);
+};
+
+std::string yes(bool b) { return b ? "true" : "false"; }
+
+const Key kKeys[] = {
+    {"plain", [](const SessionProfile& p) { return yes(p.plain); },
+     [](SessionProfile& p, const std::string& v, const std::string& w) { p.plain = parse_bool(v, w); }},
+    {"motion-filter", [](const SessionProfile& p) { return yes(p.motion_filter); },
+     [](SessionProfile& p, const std::string& v, const std::string& w) { p.motion_filter = parse_bool(v, w); }},
+    {"refine", [](const SessionProfile& p) { return yes(p.refine); },
+     [](SessionProfile& p, const std::string& v, const std::string& w) { p.refine = parse_bool(v, w); }},
+    {"recover", [](const SessionProfile& p) { return yes(p.recover); },
+     [](SessionProfile& p, const std::string& v, const std::string& w) { p.recover = parse_bool(v, w); }},
+    {"recovery", [](const SessionProfile& p) { return std::string(recovery_name(p.recovery)); },
+     [](SessionProfile& p, const std::string& v, const std::string& w) { p.recovery = parse_recovery(v, w); }},
+    {"subcell", [](const SessionProfile& p) { return std::string(p.subcell == SubCellKind::kAlignment ? "alignment" : "parabola"); },
+     [](SessionProfile& p, const std::string& v, const std::string& w) { p.subcell = parse_subcell(v, w); }},
+    {"shared-search", [](const SessionProfile& p) { return yes(p.shared_search); },
+     [](SessionProfile& p, const std::string& v, const std::string& w) { p.shared_search = parse_bool(v, w); }},
+    {"focus-stack", [](const SessionProfile& p) { return yes(p.focus_stack); },
+     [](SessionProfile& p, const std::string& v, const std::string& w) { p.focus_stack = parse_bool(v, w); }},
+    {"search-budget", [](const SessionProfile& p) { return std::to_string(p.search_budget); },
+     [](SessionProfile& p, const std::string& v, const std::string& w) {
+       p.search_budget = static_cast<std::uint32_t>(parse_count(v, w, 0, kSearchPlacementCount - kSearchNear));
+     }},
+    {"search-interval", [](const SessionProfile& p) { return std::to_string(p.search_interval); },
+     [](SessionProfile& p, const std::string& v, const std::string& w) {
+       p.search_interval = static_cast<std::uint32_t>(parse_count(v, w, 1, 100));
+     }},
+    {"screen-stride", [](const SessionProfile& p) { return std::to_string(p.screen_stride); },
+     [](SessionProfile& p, const std::string& v, const std::string& w) {
+       p.screen_stride = static_cast<std::uint32_t>(parse_count(v, w, 1, 16));
+     }},
+    {"detect-after", [](const SessionProfile& p) { return std::to_string(p.detect_after); },
+     [](SessionProfile& p, const std::string& v, const std::string& w) {
+       p.detect_after = static_cast<std::uint32_t>(parse_count(v, w, 0, 1000));
+     }},
+    {"particles", [](const SessionProfile& p) { return std::to_string(p.particles); },
+     [](SessionProfile& p, const std::string& v, const std::string& w) {
+       p.particles = static_cast<std::uint32_t>(parse_count(v, w, 1, 1000000));
+     }},
+    {"seed", [](const SessionProfile& p) { return std::to_string(p.seed); },
+     [](SessionProfile& p, const std::string& v, const std::string& w) {
+       p.seed = parse_count(v, w, 0, static_cast<std::uint64_t>(std::numeric_limits<std::int64_t>::max()));
+     }},
+    {"edge-stride", [](const SessionProfile& p) { return std::to_string(p.edge_stride); },
+     [](SessionProfile& p, const std::string& v, const std::string& w) {
+       p.edge_stride = static_cast<std::uint32_t>(parse_count(v, w, 1, 64));
+     }},
+    {"edge-tolerance", [](const SessionProfile& p) { return std::to_string(p.edge_tolerance); },
+     [](SessionProfile& p, const std::string& v, const std::string& w) {
+       p.edge_tolerance = static_cast<std::uint32_t>(parse_count(v, w, 0, 3));
+     }},
+    {"without", [](const SessionProfile& p) { return improvements_off_list(p.particle_improvements_off); },
+     [](SessionProfile& p, const std::string& v, const std::string& w) {
+       p.particle_improvements_off = v.empty() ? 0u : parse_improvements_off(v, w);
+     }},
+};
+
+const Key* find_key(std::string_view name) {
+  for (const Key& k : kKeys)
+    if (name == k.name) return &k;
+  return nullptr;
+}
+
+std::string_view trim(std::string_view s) {
+  while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
+  while (!s.empty() && (s.back() == ' ' || s.back() == '\t' || s.back() == '\r')) s.remove_suffix(1);
+  return s;
+}
+
+// The session's parts that only the thesis's loop can leave out.
+void check(const SessionProfile& p, const std::string& origin) {
+  if (validate(p) == Status::kOk) return;
+  if (p.recovery != RecoveryKind::kGrid && !recovers(p))
+    throw UsageError(origin + "recovery " + recovery_name(p.recovery) + " needs recovery: drop plain or add recover");
+  if (p.subcell != SubCellKind::kParabola && !refines(p))
+    throw UsageError(origin + "subcell alignment needs refinement: drop plain or add refine");
+  throw UsageError(origin + "the profile is not valid");
+}
+
+}  // namespace
+
+std::uint32_t parse_improvements_off(const std::string& list, const std::string& what) {
+  std::uint32_t off = 0;
+  for (std::size_t start = 0; start <= list.size();) {
+    const std::size_t comma = std::min(list.find(',', start), list.size());
+    const std::string word = list.substr(start, comma - start);
+    const auto* it = std::find_if(std::begin(kImprovementNames), std::end(kImprovementNames),
+                                  [&](const ImprovementName& n) { return word == n.word; });
+    if (it == std::end(kImprovementNames))
+      throw UsageError(what + ": '" + word + "' is none of modes, disambiguation, narrowing, kinematics, reinit, mode-filter, velocity, all");
+    off |= it->bit;
+    start = comma + 1;
+  }
+  return off;
+}
+
+std::string improvements_off_list(std::uint32_t off) {
+  std::string list;
+  for (const ImprovementName& n : kImprovementNames) {
+    if ((off & n.bit) == 0) continue;
+    if (!list.empty()) list += ',';
+    list += n.word;
+  }
+  return list;
+}
+
+std::string format_profile(const SessionProfile& profile) {
+  std::string text = std::string(kProfileMagic) + '\n';
+  for (const Key& k : kKeys) text += std::string(k.name) + " = " + k.get(profile) + '\n';
+  return text;
+}
+
+SessionProfile parse_profile(std::string_view text, const std::string& origin) {
+  SessionProfile p;
+  std::set<std::string> seen;
+  std::size_t line_no = 0;
+  bool magic = false;
+  for (std::size_t start = 0; start < text.size();) {
+    std::size_t end = text.find('\n', start);
+    if (end == std::string_view::npos) end = text.size();
+    const std::string_view line = trim(text.substr(start, end - start));
+    start = end + 1;
+    ++line_no;
+    const std::string where = origin + ":" + std::to_string(line_no) + ": ";
+    if (!magic) {
+      if (line != kProfileMagic) throw Error(where + "not a session profile (the first line must be '" + std::string(kProfileMagic) + "')");
+      magic = true;
+      continue;
+    }
+    if (line.empty() || line.front() == '#') continue;
+    const std::size_t eq = line.find('=');
+    if (eq == std::string_view::npos) throw Error(where + "want 'key = value'");
+    const std::string key(trim(line.substr(0, eq)));
+    const Key* k = find_key(key);
+    if (k == nullptr) throw Error(where + "unknown key '" + key + "'");
+    if (!seen.insert(key).second) throw Error(where + "'" + key + "' given twice");
+    try {
+      k->set(p, std::string(trim(line.substr(eq + 1))), key);
+    } catch (const UsageError& e) {
+      throw Error(where + e.what());
+    }
+  }
+  if (!magic) throw Error(origin + ": empty, not a session profile");
+  try {
+    check(p, "");
+  } catch (const UsageError& e) {
+    throw Error(origin + ": " + e.what());
+  }
+  return p;
+}
+
+SessionProfile read_profile(const std::string& path) {
+  const std::vector<std::byte> bytes = read_file(path);
+  if (bytes.size() > 65536) throw Error(path + ": too large for a session profile (" + std::to_string(bytes.size()) + " bytes)");
+  return parse_profile(std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()), path);
+}
+
+std::vector<Option> session_option_group() {
+  const std::string indent = "\n                          ";
+  return {
+      {"--profile", "FILE", "a session profile (docs/file-formats.md) to start from; the options below change it"},
+      {"--plain", "", "the thesis's loop: the best cell of each frame, no filter, refinement, recovery or" + indent +
+                          "focus stack (add --motion-filter, --refine or --recover to it one by one)"},
+      {"--motion-filter", "", "with --plain: predict the ROI, gate candidates, grade confidence (default on)"},
+      {"--refine", "", "with --plain: sub-cell x, y, theta from the neighbouring cells' scores (default on)"},
+      {"--recover", "", "with --plain: once lost, search around the last confident pose (default on)"},
+      {"--recovery", "grid|detect|particle", "how the session re-acquires a lost target: the grid search around where it" + indent +
+                                                 "was last seen (default), detection over the whole frame (docs/detection.md)," + indent +
+                                                 "or a particle filter over the whole frame (docs/particle-filter.md)"},
+      {"--detect-after", "N", "--recovery detect: the first N lost frames search with the grid, the later ones" + indent +
+                                  "by detection (default 2; 0: detection from the first)"},
+      {"--subcell", "parabola|alignment", "how refinement places the pose within the cell: a parabola through the" + indent +
+                                              "neighbouring cells' scores (default), or a least-squares alignment of the" + indent +
+                                              "matched features (docs/tracking.md compares them)"},
+      {"--search-budget", "N", "recovery grid placements per search beyond the nearest 9, 1..558 (default: all" + indent +
+                                   "558; fewer cost less and cover the grid over several searches)"},
+      {"--screen-stride", "N", "recovery placements are screened with every N-th feature, 1..16 (default 2)"},
+      {"--search-interval", "N", "search every N-th lost frame, 1..100 (default 1; the frames between only" + indent +
+                                     "predict, so a lost period costs about 1/N)"},
+      {"--no-focus-stack", "", "ignore the table's model images: depth from the winning stencils only"},
+      {"--particles", "N", "--recovery particle (and --tracker particle): particles, 1..1000000 (default 1000)"},
+      {"--seed", "S", "--recovery particle (and --tracker particle): the generator's seed (default 1); same" + indent +
+                          "seed, same output"},
+      {"--edge-stride", "N", "the particle filter's edge measure: every N-th model point, 1..64 (default 2)"},
+      {"--edge-tolerance", "PX", "the particle filter's edge measure: a point within PX pixels of an edge" + indent +
+                                     "counts, 0..3 (default 0)"},
+      {"--without", "LIST", "the particle filter's improvements to switch off, comma-separated: modes," + indent +
+                                "disambiguation, narrowing, kinematics, reinit, mode-filter, velocity;" + indent +
+                                "all: plain CONDENSATION"},
+      {"--save-profile", "FILE", "write the profile these options describe (the run goes on)"},
+  };
+}
+
+SessionProfile read_session_profile(const Args& args) {
+  SessionProfile p = args.has("--profile") ? read_profile(args.get("--profile")) : SessionProfile{};
+  // Numbers keep the command line's historical messages: "--search-budget '0': ...".
+  const auto number = [&](const char* option, const char* key) {
+    if (args.has(option)) find_key(key)->set(p, args.get(option), option);
+  };
+  if (args.has("--plain")) p.plain = true;
+  if (p.plain) {  // without --plain these name parts that are on anyway
+    if (args.has("--motion-filter")) p.motion_filter = true;
+    if (args.has("--refine")) p.refine = true;
+    if (args.has("--recover")) p.recover = true;
+  }
+  if (args.has("--recovery")) p.recovery = parse_recovery(args.get("--recovery"), "--recovery");
+  if (args.has("--subcell")) p.subcell = parse_subcell(args.get("--subcell"), "--subcell");
+  if (args.has("--no-focus-stack")) p.focus_stack = false;
+  number("--search-budget", "search-budget");
+  if (args.has("--search-budget") && p.search_budget == 0) throw UsageError("--search-budget '0': want an integer in 1..558");
+  number("--search-interval", "search-interval");
+  number("--screen-stride", "screen-stride");
+  number("--detect-after", "detect-after");
+  number("--particles", "particles");
+  number("--seed", "seed");
+  number("--edge-stride", "edge-stride");
+  number("--edge-tolerance", "edge-tolerance");
+  if (args.has("--without")) p.particle_improvements_off = parse_improvements_off(args.get("--without"), "--without");
+  if (p.recovery != RecoveryKind::kDetection && args.has("--detect-after"))
+    throw UsageError("--detect-after applies to --recovery detect");
+  for (const char* option : {"--particles", "--seed", "--without", "--edge-stride", "--edge-tolerance"}) {
+    if (p.recovery != RecoveryKind::kParticles && args.has(option) && args.get_or("--tracker", "stencil") != "particle")
+      throw UsageError(std::string(option) + " applies to --tracker particle and --recovery particle");
+  }
+  if (p.recovery != RecoveryKind::kGrid && !recovers(p))
+    throw UsageError(std::string("--recovery ") + recovery_name(p.recovery) + " needs recovery: drop --plain or add --recover");
+  if (p.subcell != SubCellKind::kParabola && !refines(p))
+    throw UsageError("--subcell needs refinement: drop --plain or add --refine");
+  check(p, "");
+  return p;
+}
+
+}  // namespace gabarit::app

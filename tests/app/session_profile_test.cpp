@@ -1,0 +1,227 @@
+// The session profile: its text file, its mode bits, its validation, and the
+// firmware's static twin (platform/cortex-m/firmware_session.hpp) against the
+// hosted session that gabarit track, the board and the harness run.
+#include "gabarit/app/session_profile.hpp"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cstring>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "firmware_session.hpp"
+#include "gabarit/app/error.hpp"
+#include "gabarit/app/hosted_session.hpp"
+#include "gabarit/app/image_io.hpp"
+#include "gabarit/app/session_profile_io.hpp"
+#include "gabarit/host/model.hpp"
+#include "gabarit/host/scene_synth.hpp"
+#include "gabarit/host/evaluation.hpp"
+#include "gabarit/link/protocol.hpp"
+#include "test_tables.hpp"
+
+namespace gabarit::app {
+namespace {
+
+SessionProfile tuned() {
+  SessionProfile p;
+  p.recovery = RecoveryKind::kDetection;
+  p.subcell = SubCellKind::kAlignment;
+  p.focus_stack = false;
+  p.search_budget = 40;
+  p.search_interval = 3;
+  p.screen_stride = 5;
+  p.detect_after = 0;
+  p.particles = 77;
+  p.seed = 1234567890123ull;
+  p.edge_stride = 9;
+  p.edge_tolerance = 3;
+  p.particle_improvements_off = kImproveModes | kImproveReinit;
+  return p;
+}
+
+TEST(SessionProfile, TextRoundTripsEveryKeyAndIsStable) {
+  for (const SessionProfile& p : {SessionProfile{}, plain_profile(), tuned()}) {
+    const std::string text = format_profile(p);
+    EXPECT_EQ(text.rfind(std::string(kProfileMagic) + "\n", 0), 0u);
+    const SessionProfile back = parse_profile(text, "t");
+    EXPECT_TRUE(back == p) << text;
+    EXPECT_EQ(format_profile(back), text);
+  }
+}
+
+TEST(SessionProfile, ShortFilesKeepTheDefaultsAndCommentsAreSkipped) {
+  const SessionProfile p = parse_profile("gabarit-session-profile 1\r\n# mine\n\nplain = true\n  recover=true  \n", "t");
+  SessionProfile want = plain_profile();
+  want.recover = true;
+  EXPECT_TRUE(p == want);
+}
+
+TEST(SessionProfile, RefusalsNameTheFileAndLine) {
+  const auto refused = [](const std::string& text, const std::string& words) {
+    try {
+      (void)parse_profile(text, "p.profile");
+      ADD_FAILURE() << "accepted: " << text;
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find(words), std::string::npos) << e.what();
+    }
+  };
+  refused("", "p.profile: empty");
+  refused("plain = true\n", "p.profile:1: not a session profile");
+  refused("gabarit-session-profile 1\nplain = yes\n", "p.profile:2: plain 'yes'");
+  refused("gabarit-session-profile 1\nspeed = 3\n", "p.profile:2: unknown key 'speed'");
+  refused("gabarit-session-profile 1\nseed = 1\nseed = 2\n", "p.profile:3: 'seed' given twice");
+  refused("gabarit-session-profile 1\nsearch-interval = 0\n", "p.profile:2: search-interval '0'");
+  refused("gabarit-session-profile 1\nsearch-budget = 559\n", "search-budget '559'");
+  refused("gabarit-session-profile 1\nwithout = modes,speed\n", "'speed' is none of");
+  refused("gabarit-session-profile 1\nplain\n", "p.profile:2: want 'key = value'");
+  refused("gabarit-session-profile 1\nplain = true\nrecovery = detect\n", "needs recovery");
+  refused("gabarit-session-profile 1\nplain = true\nsubcell = alignment\n", "needs refinement");
+}
+
+TEST(SessionProfile, ValidateRefusesWhatNoSessionRuns) {
+  EXPECT_EQ(validate(SessionProfile{}), Status::kOk);
+  EXPECT_EQ(validate(plain_profile()), Status::kOk);
+  EXPECT_EQ(validate(tuned()), Status::kOk);
+  const auto bad = [](auto change) {
+    SessionProfile p;
+    change(p);
+    return validate(p) == Status::kInvalidArgument;
+  };
+  EXPECT_TRUE(bad([](SessionProfile& p) { p.search_interval = 0; }));
+  EXPECT_TRUE(bad([](SessionProfile& p) { p.screen_stride = 17; }));
+  EXPECT_TRUE(bad([](SessionProfile& p) { p.search_budget = kSearchPlacementCount; }));
+  EXPECT_TRUE(bad([](SessionProfile& p) { p.particles = 0; }));
+  EXPECT_TRUE(bad([](SessionProfile& p) { p.edge_tolerance = 4; }));
+  EXPECT_TRUE(bad([](SessionProfile& p) { p.particle_improvements_off = 1u << 9; }));
+  EXPECT_TRUE(bad([](SessionProfile& p) { p.refine = true; }));  // a part added to the full session
+  EXPECT_TRUE(bad([](SessionProfile& p) { p.plain = true, p.recovery = RecoveryKind::kParticles; }));
+  EXPECT_TRUE(bad([](SessionProfile& p) { p.recovery = static_cast<RecoveryKind>(3); }));
+}
+
+TEST(SessionProfile, OptionsAreTheKernelsDefaultsAndThePlainLoop) {
+  const SessionOptions d = session_options(SessionProfile{});
+  const SessionOptions want{};
+  EXPECT_EQ(std::memcmp(&d.recovery, &want.recovery, sizeof want.recovery), 0);
+  EXPECT_EQ(d.motion_filter, want.motion_filter);
+  EXPECT_EQ(d.depth_votes_decisive, want.depth_votes_decisive);
+  const SessionOptions plain = session_options(plain_profile());
+  EXPECT_FALSE(plain.motion_filter || plain.refine || plain.recover || plain.vote_at_last_pose || plain.follow_when_unsure);
+  SessionProfile parts = plain_profile();
+  parts.motion_filter = true;
+  const SessionOptions with_filter = session_options(parts);
+  EXPECT_TRUE(with_filter.motion_filter && with_filter.vote_at_last_pose && with_filter.follow_when_unsure);
+  EXPECT_FALSE(with_filter.refine || with_filter.recover);
+  EXPECT_EQ(session_options(tuned()).recovery.budget, 40u);
+  EXPECT_TRUE(session_options(tuned()).align_features);
+}
+
+// What a device reports is what the harness's reference runs: the bits of the
+// profile read back from them are the same bits, and the same kernel options.
+TEST(SessionProfile, ModeBitsCarryTheChoicesAndFlagTunedNumbers) {
+  std::vector<SessionProfile> profiles = {SessionProfile{}, plain_profile()};
+  for (int parts = 0; parts < 8; ++parts) {
+    SessionProfile p = plain_profile();
+    p.motion_filter = (parts & 1) != 0, p.refine = (parts & 2) != 0, p.recover = (parts & 4) != 0;
+    profiles.push_back(p);
+  }
+  SessionProfile d;
+  d.recovery = RecoveryKind::kDetection;
+  profiles.push_back(d);
+  d.recovery = RecoveryKind::kParticles, d.subcell = SubCellKind::kAlignment, d.focus_stack = false;
+  profiles.push_back(d);
+  for (const SessionProfile& p : profiles) {
+    for (int effect = 0; effect < 4; ++effect) {
+      const std::uint32_t bits = mode_bits(p, (effect & 1) != 0, (effect & 2) != 0);
+      EXPECT_EQ(bits & link::kModeTuned, 0u);
+      const SessionProfile back = profile_from_mode_bits(bits);
+      EXPECT_EQ(mode_bits(back, (effect & 1) != 0, (effect & 2) != 0), bits) << format_profile(p);
+      const SessionOptions a = session_options(p), b = session_options(back);
+      EXPECT_EQ(std::memcmp(&a.recovery, &b.recovery, sizeof a.recovery), 0);
+      EXPECT_EQ(a.motion_filter, b.motion_filter);
+      EXPECT_EQ(a.refine, b.refine);
+      EXPECT_EQ(a.recover, b.recover);
+      EXPECT_EQ(a.align_features, b.align_features);
+      EXPECT_EQ(a.vote_at_last_pose, b.vote_at_last_pose);
+    }
+  }
+  EXPECT_NE(mode_bits(tuned(), true, true) & link::kModeTuned, 0u);
+}
+
+TEST(SessionProfile, CommandLineGroupReadsIntoTheProfileOnce) {
+  Args args("t", "", "", session_option_group());
+  ASSERT_TRUE(args.parse({"--recovery", "detect", "--detect-after", "0", "--search-budget", "40", "--no-focus-stack"}));
+  const SessionProfile p = read_session_profile(args);
+  EXPECT_EQ(p.recovery, RecoveryKind::kDetection);
+  EXPECT_EQ(p.detect_after, 0u);
+  EXPECT_EQ(p.search_budget, 40u);
+  EXPECT_FALSE(p.focus_stack);
+  Args refused("t", "", "", session_option_group());
+  ASSERT_TRUE(refused.parse({"--plain", "--recovery", "particle"}));
+  EXPECT_THROW((void)read_session_profile(refused), UsageError);
+  Args stray("t", "", "", session_option_group());
+  ASSERT_TRUE(stray.parse({"--detect-after", "3"}));
+  EXPECT_THROW((void)read_session_profile(stray), UsageError);
+}
+
+// The firmware's static twin and the hosted session, on the same grayscale
+// scene (two depths, an occlusion that loses and re-acquires the target):
+// every frame's result bit for bit, from the bits the twin reports in CAPS,
+// as the harness builds its reference.
+TEST(SessionProfile, FirmwareTwinMatchesTheHostedSessionBitForBit) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / ("gabarit-profile-test-" + std::to_string(::getpid()));
+  host::SceneOptions so;
+  so.frames = 50;
+  so.width = 0, so.height = 0;  // the object's own size
+  so.depths = 2;
+  so.occlusion_start = 12;
+  so.occlusion_frames = 16;
+  so.blur_every = 0;
+  host::write_scene_sequence(so, dir.string());
+  host::ImageModelOptions mo;
+  mo.canny = true;
+  const std::vector<std::byte> bytes = testing::build(
+      host::model_from_images({(dir / "model_00.pgm").string(), (dir / "model_01.pgm").string()}, mo), "-3:3:7", "-3:3:7", "-1:1:3");
+  const TableView table = testing::open_table(bytes);
+  ASSERT_TRUE(table.has_model_images());
+
+  std::vector<ImageView> views(16);
+  mcu::FirmwareSession twin(table, views);
+  HostedSession hosted(table, profile_from_mode_bits(twin.mode()));
+  EXPECT_EQ(hosted.mode(), twin.mode());
+  EXPECT_NE(twin.mode() & link::kModeFocusStack, 0u);
+  std::vector<RoiPoint> features(tracker_feature_capacity(table));
+  std::vector<VoteCounter> counters(voter_counter_count(table.cell_count()));
+  std::vector<std::uint8_t> mask(tracker_mask_bytes(table));
+  const TrackerScratch fine{features, counters, mask};
+
+  const auto truth = host::read_pose_csv((dir / "gt.csv").string());
+  const Pose start{static_cast<float>(truth[0].x), static_cast<float>(truth[0].y), static_cast<float>(truth[0].theta_deg), 0};
+  ASSERT_TRUE(twin.start(start));
+  ASSERT_TRUE(hosted.start(start));
+  auto frames = open_frames((dir / "frames.y4m").string());
+  GrayImage frame;
+  int lost = 0, n = 0;
+  for (; frames->next(frame); ++n) {
+    SessionResult a, b;
+    ASSERT_EQ(twin.step(frame.view(), fine, a), Status::kOk);
+    ASSERT_EQ(hosted.step(frame.view(), b), Status::kOk);
+    const auto same = [](float x, float y) { return std::memcmp(&x, &y, sizeof x) == 0; };
+    EXPECT_TRUE(same(a.pose.x, b.pose.x) && same(a.pose.y, b.pose.y) && same(a.pose.theta_deg, b.pose.theta_deg)) << "frame " << n;
+    EXPECT_EQ(a.pose.depth, b.pose.depth) << n;
+    EXPECT_EQ(a.state, b.state) << n;
+    EXPECT_EQ(a.confidence, b.confidence) << n;
+    EXPECT_TRUE(same(a.score, b.score)) << n;
+    EXPECT_EQ(a.step.votes, b.step.votes) << n;
+    lost += a.state == TrackState::kLost;
+  }
+  EXPECT_EQ(n, 50);
+  EXPECT_GT(lost, 0) << "the occlusion should have lost the target (the recovery path is compared too)";
+  fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace gabarit::app
