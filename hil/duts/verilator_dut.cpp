@@ -23,6 +23,7 @@
 #include "gabarit/app/error.hpp"
 #include "gabarit/app/files.hpp"
 #include "gabarit/app/scratch.hpp"
+#include "gabarit/app/session_profile.hpp"
 #include "gabarit/crc32.hpp"
 #include "gabarit/host/hdl_export.hpp"
 #include "gabarit/host/rng.hpp"
@@ -171,20 +172,17 @@ int run(int argc, char** argv) {
     std::fprintf(stderr, "gabarit-hil-verilator: %s (%u cells, %u ROI pixels) exceeds the voter's build (%u cells, %u pixels, %u refs per lane)\n",
                  table_path.c_str(), t.cell_count(), t.roi_pixels(), kCells, kPixels, kRefsPerLane);
   VoterDut app(t, fits);
-  link::Caps caps;
-  caps.max_payload = static_cast<std::uint16_t>(link::kMaxPayload);
-  caps.table_crc = crc32(table.bytes());
-  caps.table_bytes = static_cast<std::uint32_t>(table.bytes().size());
-  caps.clock_hz = clock_hz;
-  caps.frame_slots = 1;
-  caps.max_frame_bytes = 1u << 20;
-  caps.mode = 0;  // the thesis's loop
-  link::set_text(caps.kind, "verilator");
   char board[32];
   std::snprintf(board, sizeof board, "gbt_voter %u lanes (Verilator)", kLanes);
-  link::set_text(caps.board, board);
-  link::set_text(caps.firmware, "gabarit 0.1.0");
-  caps.device_id = crc32(std::as_bytes(std::span(board, std::strlen(board))));
+  link::DeviceDescription device;
+  device.table_crc = crc32(table.bytes());
+  device.table_bytes = static_cast<std::uint32_t>(table.bytes().size());
+  device.clock_hz = clock_hz;
+  device.max_frame_bytes = 1u << 20;
+  device.mode = app::mode_bits(app::plain_profile(), false, false);  // the voter runs the thesis's loop
+  device.kind = "verilator";
+  device.board = board;
+  const link::Caps caps = link::make_caps(device);
   std::vector<std::uint8_t> memory(link::dut_frame_memory_bytes(caps.frame_slots, caps.max_frame_bytes));
   StdoutOutput out;
   link::DutEndpoint endpoint(caps, memory);

@@ -92,18 +92,18 @@ class InprocessDut final : public DutDriver {
   void run(Transport& end) noexcept {
     try {
       app::SessionDut app(table_.view(), options_.profile, &steady_micros);
-      link::Caps caps;
-      caps.max_payload = options_.max_payload;
-      caps.table_crc = crc32(table_.bytes());
-      caps.table_bytes = static_cast<std::uint32_t>(table_.bytes().size());
-      caps.clock_hz = 1000000;
-      caps.frame_slots = options_.frame_slots;
-      caps.max_frame_bytes = 1024u * 1024u;
-      caps.mode = app.mode();
-      link::set_text(caps.kind, "inprocess");
-      link::set_text(caps.board, "host thread");
-      link::set_text(caps.firmware, "gabarit 0.1.0");
-      caps.device_id = crc32(std::as_bytes(std::span("inprocess/host thread")));
+      link::DeviceDescription device;
+      device.max_payload = options_.max_payload;
+      device.table_crc = crc32(table_.bytes());
+      device.table_bytes = static_cast<std::uint32_t>(table_.bytes().size());
+      device.clock_hz = 1000000;
+      device.frame_slots = options_.frame_slots;
+      device.max_frame_bytes = 1024u * 1024u;
+      device.mode = app.mode();
+      device.kind = "inprocess";
+      device.board = "host thread";
+      device.device_id = crc32(std::as_bytes(std::span("inprocess/host thread")));
+      const link::Caps caps = link::make_caps(device);
       std::vector<std::uint8_t> memory(link::dut_frame_memory_bytes(caps.frame_slots, caps.max_frame_bytes));
       LoopbackOutput out(end);
       link::DutEndpoint endpoint(caps, memory);

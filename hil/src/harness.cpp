@@ -148,8 +148,7 @@ class Run {
   link::Caps caps_;
   bool awaiting_caps_ = false;
   std::uint32_t run_id_ = 0;
-  std::uint32_t seq_ = 0, peer_seq_ = 0;
-  bool peer_seq_valid_ = false;  // false until the DUT's first message (again after a restart)
+  link::Sequencer sequence_;  // the peer forgotten at a restart: a restarted DUT numbers from 0
   std::map<std::uint32_t, app::GrayImage> images_;  // sent, not yet resolved
   std::set<std::uint32_t> outstanding_;
   std::vector<std::vector<std::byte>> held_;  // a reordered frame's messages
@@ -171,10 +170,7 @@ class Run {
 };
 
 std::vector<std::byte> Run::encode(MessageType type, std::span<const std::byte> payload) {
-  link::Header h;
-  h.type = type;
-  h.seq = seq_++;
-  h.ack = peer_seq_;
+  const link::Header h = sequence_.stamp(type);
   std::vector<std::byte> m(link::message_bytes(payload.size()));
   std::size_t n = 0;
   if (link::encode_message(h, payload, m, n) != Status::kOk) throw app::Error("hil: cannot encode a message");
@@ -213,7 +209,7 @@ void Run::resolve(std::uint32_t frame, Fate fate, const std::string& reason, con
     last_pose_ = pose->pose;
     const auto it = images_.find(frame);
     if (it != images_.end()) {
-      r.frame_crc_ok = crc32c(std::as_bytes(std::span(it->second.pixels))) == pose->frame_crc;
+      r.frame_crc_ok = link::frame_crc(it->second.view()) == pose->frame_crc;
       if (reference_) {
         r.mismatch = reference_->check(it->second, *pose);
         r.reference = r.mismatch.empty() ? 1 : 0;
@@ -232,8 +228,8 @@ void Run::handle(const std::vector<std::byte>& message) {
     ++result_.bad_messages_in;
     return;
   }
-  if (!peer_seq_valid_ || link::seq_after(h.seq, peer_seq_)) peer_seq_ = h.seq;  // our ack
-  peer_seq_valid_ = true;
+  std::uint32_t skipped = 0;
+  (void)sequence_.accept(h.seq, skipped);  // our ack; the harness counts gaps by frame, not by message
   const auto decoded = [&](auto& m) {
     if (link::decode(payload, m) == Status::kOk) return true;
     ++result_.bad_messages_in;
@@ -422,7 +418,7 @@ void Run::restart(RestartCause cause, const std::string& why) {
   held_.clear();
   held_frame_ = link::kNoFrame;
   ping_outstanding_ = false;
-  peer_seq_valid_ = false;  // a restarted DUT numbers its messages from 0
+  sequence_.forget_peer();  // a restarted DUT numbers its messages from 0
   dut_.stop();
   try {
     dut_.start();

@@ -148,19 +148,16 @@ extern "C" int app_main() {
   Timer timer;
   timer.start();
   TableView view;
-  link::Caps caps;
-  const TableView* table = open_slot_table(view, caps.table_bytes, caps.table_crc);
+  link::DeviceDescription device;
+  const TableView* table = open_slot_table(view, device.table_bytes, device.table_crc);
   FirmwareDut app(view, table, timer);
-  caps.max_payload = static_cast<std::uint16_t>(kMaxPayload);
-  caps.clock_hz = mcu::board::kCoreClockHz;
-  caps.frame_slots = 1;
-  caps.max_frame_bytes = kMaxFrameBytes;
-  caps.mode = app.mode();
-  link::set_text(caps.kind, "cortex-m");
-  link::set_text(caps.board, mcu::board::kName);
-  link::set_text(caps.firmware, "gabarit 0.1.0");
-  caps.device_id = crc32(std::as_bytes(std::span(mcu::board::kName, std::strlen(mcu::board::kName))));
-  link::DutEndpoint endpoint(caps, g_frame);
+  device.max_payload = static_cast<std::uint16_t>(kMaxPayload);
+  device.clock_hz = mcu::board::kCoreClockHz;
+  device.max_frame_bytes = kMaxFrameBytes;
+  device.mode = app.mode();
+  device.kind = "cortex-m";
+  device.board = mcu::board::kName;
+  link::DutEndpoint endpoint(link::make_caps(device), g_frame);
   link::CobsStreamDecoder decoder(g_rx);
   UartOutput out(uart);
   for (;;) {

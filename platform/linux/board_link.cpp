@@ -6,10 +6,7 @@ namespace gabarit::board {
 BoardLink::BoardLink(UsbGadget& gadget, std::size_t max_unacknowledged) : gadget_(gadget), max_unacked_(max_unacknowledged) {}
 
 void BoardLink::send(link::MessageType type, std::span<const std::byte> payload) {
-  link::Header h;
-  h.type = type;
-  h.seq = seq_++;
-  h.ack = peer_seq_;
+  const link::Header h = sequence_.stamp(type);
   Sent s{h.seq, std::vector<std::byte>(link::message_bytes(payload.size()))};
   std::size_t n = 0;
   if (link::encode_message(h, payload, s.bytes, n) != Status::kOk) return;  // payloads here are all small
@@ -70,10 +67,8 @@ void BoardLink::handle(std::span<const std::byte> message, Handler& handler) {
     return;
   }
   ++stats_.messages_in;
-  if (!any_peer_ || link::seq_after(h.seq, peer_seq_)) {
-    if (any_peer_ && h.seq - peer_seq_ > 1) stats_.sequence_gaps += h.seq - peer_seq_ - 1;
-    peer_seq_ = h.seq;
-    any_peer_ = true;
+  if (std::uint32_t skipped = 0; sequence_.accept(h.seq, skipped)) {
+    stats_.sequence_gaps += skipped;
   } else {
     ++stats_.stale;
   }

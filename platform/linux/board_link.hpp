@@ -68,9 +68,7 @@ class BoardLink {
     std::vector<std::byte> bytes;
   };
   std::deque<Sent> unacked_;
-  std::uint32_t seq_ = 1;  // 0 is the host's "nothing acknowledged yet"
-  std::uint32_t peer_seq_ = 0;
-  bool any_peer_ = false;
+  link::Sequencer sequence_{1};  // from 1: 0 is the host's "nothing acknowledged yet"
   std::uint64_t enables_seen_ = 0;
   std::uint64_t last_progress_us_ = 0;  // the last ack that freed a message, or the last resend
   bool running_ = false;

@@ -178,13 +178,6 @@ std::uint32_t luma_crc32(const ImageView& image) {
   return crc;
 }
 
-std::uint32_t luma_crc32c(const ImageView& image) {
-  std::uint32_t crc = 0;
-  for (std::uint32_t y = 0; y < image.height; ++y)
-    crc = crc32c_update(crc, {reinterpret_cast<const std::byte*>(image.pixels + std::size_t{y} * image.stride), image.width});
-  return crc;
-}
-
 std::uint64_t monotonic_us() {
   timespec t{};
   ::clock_gettime(CLOCK_MONOTONIC, &t);
@@ -334,19 +327,19 @@ class Board : private board::BoardLink::Handler {
 
   // ---- BoardLink::Handler: the host's requests over USB.
   link::Refusal start(const link::Hello& hello, link::Caps& caps) override {
-    caps.version = link::kVersion;
-    caps.max_payload = static_cast<std::uint16_t>(link::kMinPayload);
-    caps.table_crc = table_crc_;
-    caps.table_bytes = table_bytes_;
-    caps.clock_hz = 1000000;  // CLOCK_MONOTONIC in microseconds, as V4L2's timestamps
-    caps.frame_slots = 1;
-    caps.max_frame_bytes = 0;  // frames come from the camera, not the link
-    caps.mode = session_.mode();
-    caps.boot_count = 0;
-    caps.device_id = device_id();
-    link::set_text(caps.kind, "linux-board");
-    link::set_text(caps.board, board_name().c_str());
-    link::set_text(caps.firmware, "gabarit-board");
+    link::DeviceDescription device;
+    device.max_payload = static_cast<std::uint16_t>(link::kMinPayload);
+    device.table_crc = table_crc_;
+    device.table_bytes = table_bytes_;
+    device.clock_hz = 1000000;  // CLOCK_MONOTONIC in microseconds, as V4L2's timestamps
+    device.max_frame_bytes = 0;  // frames come from the camera, not the link
+    device.mode = session_.mode();
+    device.device_id = device_id();
+    device.kind = "linux-board";
+    const std::string name = board_name();
+    device.board = name.c_str();
+    device.software = "gabarit-board";
+    caps = link::make_caps(device);
     if (hello.version != link::kVersion) return link::Refusal::kProtocolVersion;
     if (hello.table_crc != 0 && hello.table_crc != table_crc_) return link::Refusal::kTableMismatch;
     if (!session_.start(hello.initial)) return link::Refusal::kBadPose;
@@ -476,14 +469,14 @@ class Board : private board::BoardLink::Handler {
   }
   void note_captured(const board::CapturedFrame& frame) {
     ImageView image;
-    if (frame_luma(frame, image)) (void)repeat_of_known(luma_crc32c(image));
+    if (frame_luma(frame, image)) (void)repeat_of_known(link::frame_crc(image));
   }
 
   void process(const board::CapturedFrame& frame) {
     const std::uint64_t dequeued_us = monotonic_us();
     ImageView image;
     if (!frame_luma(frame, image)) return;
-    const std::uint32_t crc32c_of_frame = c_.usb || c_.skip_repeats ? luma_crc32c(image) : 0;
+    const std::uint32_t crc32c_of_frame = c_.usb || c_.skip_repeats ? link::frame_crc(image) : 0;
     if (c_.skip_repeats && repeat_of_known(crc32c_of_frame)) {
       ++repeats_;
       return;

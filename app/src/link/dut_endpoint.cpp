@@ -42,11 +42,7 @@ std::uint32_t DutEndpoint::oldest_queued() const noexcept {
 }
 
 void DutEndpoint::send(MessageType type, std::span<const std::byte> payload) noexcept {
-  Header h;
-  h.type = type;
-  h.seq = seq_++;
-  h.ack = peer_seq_;
-  h.credits = credits();
+  const Header h = sequence_.stamp(type, credits());
   GABARIT_ASSERT(outbox_count_ < kOutboxMessages);
   if (outbox_count_ == kOutboxMessages) {  // the caller did not flush: never overwrite
     ++stats_.bad_message;
@@ -112,10 +108,8 @@ void DutEndpoint::on_message(std::span<const std::byte> message, std::uint64_t n
     return;
   }
   ++stats_.messages_in;
-  if (!any_seq_ || seq_after(h.seq, peer_seq_)) {
-    if (any_seq_ && h.seq - peer_seq_ > 1) stats_.sequence_gaps += h.seq - peer_seq_ - 1;
-    peer_seq_ = h.seq;
-    any_seq_ = true;
+  if (std::uint32_t skipped = 0; sequence_.accept(h.seq, skipped)) {
+    stats_.sequence_gaps += skipped;
   } else {
     ++stats_.stale;  // a duplicate or a late message: frames dedupe by frame id below
   }
@@ -276,7 +270,7 @@ void DutEndpoint::on_frame(std::span<const std::byte> payload) noexcept {
   Slot& s = slots_[filling_];
   if (s.filled == std::uint32_t{s.width} * s.height) {
     const auto pixels = slot_pixels(filling_).first(s.filled);
-    s.crc = crc32c(std::as_bytes(pixels));
+    s.crc = frame_crc(ImageView{pixels.data(), s.width, s.height, s.width});
     s.received = now_;
     s.order = next_order_++;
     s.state = SlotState::kReady;

@@ -118,6 +118,29 @@ const char* message_type_name(MessageType type) noexcept {
   return "unknown";
 }
 
+std::uint32_t frame_crc(const ImageView& frame) noexcept {
+  std::uint32_t crc = 0;
+  for (std::uint32_t y = 0; y < frame.height; ++y)
+    crc = crc32c_update(crc, std::as_bytes(std::span(frame.pixels + std::size_t{y} * frame.stride, frame.width)));
+  return crc;
+}
+
+Caps make_caps(const DeviceDescription& d) noexcept {
+  Caps caps;
+  caps.max_payload = d.max_payload;
+  caps.table_crc = d.table_crc;
+  caps.table_bytes = d.table_bytes;
+  caps.clock_hz = d.clock_hz;
+  caps.frame_slots = d.frame_slots;
+  caps.max_frame_bytes = d.max_frame_bytes;
+  caps.mode = d.mode;
+  set_text(caps.kind, d.kind);
+  set_text(caps.board, d.board);
+  set_text(caps.firmware, d.software);
+  caps.device_id = d.device_id != 0 ? d.device_id : crc32(std::as_bytes(std::span(d.board, std::strlen(d.board))));
+  return caps;
+}
+
 const char* refusal_name(Refusal refusal) noexcept {
   switch (refusal) {
     case Refusal::kNone: return "none";

@@ -401,8 +401,7 @@ class Relay {
   bool have_screen_ = false;
   bool expecting_kill_ = false;
   // The board link's numbering.
-  std::uint32_t seq_ = 1, peer_seq_ = 0;
-  bool any_peer_ = false;
+  link::Sequencer sequence_{1};  // from 1: 0 is the board's "nothing acknowledged yet"
   std::uint64_t last_ping_ = 0, last_rss_ = 0;
   std::uint32_t ping_token_ = 0;
   // What the board said.
@@ -420,10 +419,7 @@ class Relay {
 
 bool Relay::board_send(link::MessageType type, std::span<const std::byte> payload, std::span<const std::byte> mangle) {
   if (!usb_.is_open()) return false;
-  link::Header h;
-  h.type = type;
-  h.seq = seq_++;
-  h.ack = peer_seq_;
+  const link::Header h = sequence_.stamp(type);
   std::vector<std::byte> m(link::message_bytes(payload.size()));
   std::size_t n = 0;
   if (link::encode_message(h, payload, m, n) != Status::kOk) return false;
@@ -455,12 +451,12 @@ void Relay::on_board_message(const std::vector<std::byte>& m) {
   if (link::decode_message(m, h, payload) != Status::kOk) return;
   // In sequence only (go-back-N): a message after a lost one is dropped, and
   // the board sends both again, since the ack (the last taken) stays put.
-  if (any_peer_ && h.seq != peer_seq_ + 1) {
-    ++(link::seq_after(h.seq, peer_seq_) ? board_out_of_sequence_ : board_duplicates_);
+  if (!sequence_.in_order(h.seq)) {
+    ++(link::seq_after(h.seq, sequence_.ack()) ? board_out_of_sequence_ : board_duplicates_);
     return;
   }
-  peer_seq_ = h.seq;
-  any_peer_ = true;
+  std::uint32_t skipped = 0;
+  (void)sequence_.accept(h.seq, skipped);  // in order: nothing skipped
   switch (h.type) {
     case link::MessageType::kCaps: {
       link::Caps caps;
@@ -535,7 +531,7 @@ void Relay::keep_board_alive() {
 
 void Relay::board_restart(const char* why) {
   usb_.close();
-  any_peer_ = false;  // a new program numbers its messages afresh
+  sequence_.forget_peer();  // a new program numbers its messages afresh
   ++board_restarts_;
   if (!board_.start(c_)) log("cannot start the board's program");
   current_.reset();
@@ -578,7 +574,7 @@ bool Relay::camera_up(bool wrap_sequence, std::string& error) {
 }
 
 bool Relay::loop_shows(const std::uint8_t* pixels, std::uint32_t w, std::uint32_t h, std::string& error) {
-  const std::uint32_t want = crc32c(std::as_bytes(std::span(pixels, std::size_t{w} * h)));
+  const std::uint32_t want = link::frame_crc(ImageView{pixels, w, h, w});
   board::V4l2Capture capture;
   board::CaptureOptions o;
   o.device = c_.capture;
@@ -594,9 +590,8 @@ bool Relay::loop_shows(const std::uint8_t* pixels, std::uint32_t w, std::uint32_
     if (e == board::CaptureEvent::kDeviceLost) return error = "checking the loop: " + capture.error(), false;
     if (e != board::CaptureEvent::kFrame) continue;
     const std::size_t stride = capture.layout().bytes_per_line;
-    std::uint32_t crc = 0;
-    for (std::uint32_t y = 0; y < h && f.bytes_used >= (y + 1) * stride; ++y)
-      crc = crc32c_update(crc, std::as_bytes(std::span(f.data + std::size_t{y} * stride, w)));
+    const bool whole = f.bytes_used >= std::size_t{h} * stride;  // a short buffer cannot show the frame
+    const std::uint32_t crc = whole ? link::frame_crc(ImageView{f.data, w, h, stride}) : ~want;
     (void)capture.requeue(f.index);
     if (crc == want) return true;
   }
@@ -834,7 +829,7 @@ void Relay::take_frames() {
   if (current_) return;
   link::ReadyFrame f;
   if (!endpoint_->next_frame(f)) return;
-  const std::uint32_t crc = crc32c(std::as_bytes(f.pixels));
+  const std::uint32_t crc = link::frame_crc(ImageView{f.pixels.data(), f.width, f.height, f.width});
   if (have_screen_ && crc == screen_crc_) {
     // The board cannot tell it from the picture already on the camera (it skips repeats).
     endpoint_->report_failure(link::EventKind::kSkipped, link::EventReason::kSameAsPrevious, 0, now_us());
@@ -862,12 +857,14 @@ int Relay::run() {
   std::string port = c_.port == "auto" ? find_virtio_port("gabarit.hil") : c_.port;
   if (port.empty() || !harness_.open(port)) return log("no virtio-serial port named gabarit.hil"), 1;
   if (!wait_usb_open(20000)) return log("the board's USB gadget did not appear in 20 s: %s", usb_.error().c_str()), 1;
-  link::Caps caps;
-  caps.max_payload = static_cast<std::uint16_t>(link::kMaxPayload);
-  caps.clock_hz = 1000000;
-  caps.frame_slots = 1;  // one frame on the camera at a time
-  caps.max_frame_bytes = c_.width * c_.height;
-  caps.device_id = crc32(std::as_bytes(std::span(usb_.serial().data(), usb_.serial().size())));
+  link::DeviceDescription device;
+  device.clock_hz = 1000000;
+  device.frame_slots = 1;  // one frame on the camera at a time
+  device.max_frame_bytes = c_.width * c_.height;
+  device.device_id = crc32(std::as_bytes(std::span(usb_.serial().data(), usb_.serial().size())));
+  device.kind = c_.kind.c_str();
+  device.board = c_.board_name.c_str();
+  device.software = "gabarit-board";
   if (!c_.table.empty()) {
     std::vector<std::byte> bytes;
     if (std::FILE* f = std::fopen(c_.table.c_str(), "rb")) {
@@ -877,12 +874,10 @@ int Relay::run() {
     } else {
       return log("cannot read the table %s", c_.table.c_str()), 1;
     }
-    caps.table_crc = crc32(bytes);
-    caps.table_bytes = static_cast<std::uint32_t>(bytes.size());
+    device.table_crc = crc32(bytes);
+    device.table_bytes = static_cast<std::uint32_t>(bytes.size());
   }
-  link::set_text(caps.kind, c_.kind.c_str());
-  link::set_text(caps.board, c_.board_name.c_str());
-  link::set_text(caps.firmware, "gabarit-board");
+  const link::Caps caps = link::make_caps(device);
   frame_memory_.assign(link::dut_frame_memory_bytes(1, caps.max_frame_bytes), 0);
   endpoint_.emplace(caps, frame_memory_);
   log("ready: harness on %s, board's gadget %04x:%04x serial %s", port.c_str(), c_.usb.vendor_id, c_.usb.product_id,

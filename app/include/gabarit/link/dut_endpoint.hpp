@@ -141,9 +141,7 @@ class DutEndpoint {
   std::uint64_t seen_mask_ = 0;
   std::uint32_t last_refused_ = kNoFrame;  // a late frame already answered (its other fragments stay quiet)
   bool running_ = false, bye_ = false;
-  bool any_seq_ = false;
-  std::uint32_t peer_seq_ = 0;  // the last sequence number accepted (our ack)
-  std::uint32_t seq_ = 0;       // ours
+  Sequencer sequence_;  // ours, and the last of the peer's accepted (our ack)
   Stats stats_;
   Hello hello_;
   bool hello_pending_ = false;

@@ -20,6 +20,7 @@
 #include <cstdint>
 #include <span>
 
+#include "gabarit/image_view.hpp"
 #include "gabarit/pose.hpp"
 #include "gabarit/status.hpp"
 
@@ -67,6 +68,45 @@ struct Header {
 constexpr bool seq_after(std::uint32_t a, std::uint32_t b) noexcept {
   return static_cast<std::int32_t>(a - b) > 0;
 }
+
+// One end's sequence numbers, in one place for every sender and receiver
+// (the device endpoint, the harness, the board's link, the rig's relay): the
+// header of each message it sends (its own next number, and as the ack the
+// last number it accepted from the peer), and what it accepts of the peer's.
+class Sequencer {
+ public:
+  explicit constexpr Sequencer(std::uint32_t first = 0) noexcept : next_(first) {}
+  // The header of our next message (its number taken).
+  Header stamp(MessageType type, std::uint16_t credits = 0) noexcept {
+    Header h;
+    h.type = type;
+    h.seq = next_++;
+    h.ack = peer_;
+    h.credits = credits;
+    return h;
+  }
+  // A peer's message numbered `seq`: accepted (it becomes our ack) if it is
+  // the first or after every one accepted before, `skipped` then counting the
+  // numbers between; false for a duplicate or a late one.
+  bool accept(std::uint32_t seq, std::uint32_t& skipped) noexcept {
+    skipped = 0;
+    if (any_ && !seq_after(seq, peer_)) return false;
+    if (any_) skipped = seq - peer_ - 1;
+    peer_ = seq;
+    any_ = true;
+    return true;
+  }
+  // Go-back-N takes only the number right after the last accepted (or the first).
+  bool in_order(std::uint32_t seq) const noexcept { return !any_ || seq == peer_ + 1; }
+  // A restarted peer numbers its messages from its start again.
+  void forget_peer() noexcept { any_ = false; }
+  std::uint32_t ack() const noexcept { return peer_; }
+
+ private:
+  std::uint32_t next_;
+  std::uint32_t peer_ = 0;
+  bool any_ = false;
+};
 
 // Header, payload and CRC into `out` (message_bytes(payload.size()) bytes).
 // kInvalidArgument for a payload over kMaxPayload, kBufferTooSmall for a short `out`.
@@ -301,5 +341,28 @@ void set_text(char (&field)[N], const char* text) noexcept {
   for (; text != nullptr && text[i] != '\0' && i + 1 < N; ++i) field[i] = text[i];
   for (; i < N; ++i) field[i] = '\0';
 }
+
+// The POSE's frame CRC: CRC-32C of the frame's luma row by row, `width`
+// bytes of each row (no row padding). Every device and the harness compute
+// it here, so that a frame is named the same way on every target.
+std::uint32_t frame_crc(const ImageView& frame) noexcept;
+
+// What every device under test reports about itself in CAPS, filled in one
+// place (make_caps): its table, its limits, its mode, who it is.
+inline constexpr const char* kSoftwareVersion = "gabarit 0.1.0";
+struct DeviceDescription {
+  std::uint32_t table_crc = 0;        // CRC-32 of the DUT's table file (0 and 0 bytes: none)
+  std::uint32_t table_bytes = 0;
+  std::uint32_t clock_hz = 0;         // the unit of its timestamps
+  std::uint32_t frame_slots = 1;
+  std::uint32_t max_frame_bytes = 0;  // 0: frames come from a camera, not the link
+  std::uint16_t max_payload = kMaxPayload;
+  std::uint32_t mode = 0;             // the session profile's mode bits (app/session_profile.hpp)
+  const char* kind = "";              // "inprocess", "verilator", "cortex-m", "linux-board", ...
+  const char* board = "";
+  const char* software = kSoftwareVersion;
+  std::uint64_t device_id = 0;        // 0: the CRC-32 of `board` (stable per board name)
+};
+Caps make_caps(const DeviceDescription& device) noexcept;
 
 }  // namespace gabarit::link
