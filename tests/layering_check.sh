@@ -1,11 +1,13 @@
 #!/usr/bin/env bash
-# Layers point one way (README.md, "Where things are"):
+# Layers point one way (README.md, "Where things are"), one floor per folder:
 #   kernel/     includes and links nothing of ours
 #   app/        only the kernel
-#   platform/   the kernel and app/, never tools/ or hil/
-#   tools/lib/  (host) the kernel and app/, never platform/ or hil/
-#   hil/        the kernel, app/ and tools/lib/, never platform/
+#   platform/   the kernel and app/, never tools/, hil/ or hdl/
+#   hdl/sim     (the Verilated voter's C++ harness) the kernel and app/
+#   tools/lib/  (host) the kernel and app/, never platform/, hil/ or hdl/
+#   hil/        the kernel, app/ and hdl/sim, never tools/ or platform/
 #   tools/      (the CLI, the bench) all of the above but platform/
+#   tests/      anything (it is the top)
 # Checks every quoted #include of every source file in those folders, and the
 # link lines of their CMakeLists.txt. Exits non-zero naming each violation.
 # --self-test plants a violation in a copy and expects it to be caught.
@@ -23,6 +25,7 @@ check() {
     elif [ -f "$top/app/include/$inc" ]; then echo app
     elif [ -f "$top/tools/lib/include/$inc" ]; then echo host
     elif [ -f "$top/hil/include/$inc" ]; then echo hil
+    elif [ -f "$top/hdl/sim/$inc" ]; then echo hdl
     elif [ -f "$(dirname "$from")/$inc" ]; then layer_of_file "$from"
     else echo other
     fi
@@ -38,13 +41,15 @@ check() {
       kernel:kernel) return 0 ;;
       app:kernel|app:app) return 0 ;;
       platform:kernel|platform:app|platform:platform|platform:other) return 0 ;;
+      hdl:kernel|hdl:app|hdl:hdl|hdl:other) return 0 ;;
       host:kernel|host:app|host:host|host:other) return 0 ;;
-      hil:kernel|hil:app|hil:host|hil:hil|hil:other) return 0 ;;
-      tools:kernel|tools:app|tools:host|tools:hil|tools:tools|tools:other) return 0 ;;
+      hil:kernel|hil:app|hil:hdl|hil:hil|hil:other) return 0 ;;
+      tools:kernel|tools:app|tools:host|tools:hil|tools:hdl|tools:tools|tools:other) return 0 ;;
+      tests:*) return 0 ;;
     esac
     return 1
   }
-  for top_dir in kernel app platform tools hil; do
+  for top_dir in kernel app platform hdl tools hil tests; do
     while IFS= read -r file; do
       layer=$(layer_of_file "$file")
       while IFS= read -r inc; do
@@ -61,10 +66,11 @@ check() {
     [gabarit_kernel]=kernel [gabarit::kernel]=kernel
     [gabarit_app]=app [gabarit::app]=app [gabarit_test_vectors]=app [gabarit::test_vectors]=app
     [gabarit_link]=app [gabarit::link]=app [gabarit_session_profile]=app [gabarit::session_profile]=app
+    [gabarit_link_usb]=app [gabarit::link_usb]=app
     [gabarit_host]=host [gabarit::host]=host [gabarit_bench_lib]=tools
     [gabarit_hil]=hil [gabarit::hil]=hil
     [gabarit_board]=platform)
-  for layer in kernel app platform tools hil; do
+  for layer in kernel app platform hdl tools hil tests; do
     while IFS= read -r cmake; do
       while IFS= read -r name; do
         dep=${owner[$name]:-}
@@ -82,17 +88,23 @@ check() {
 if [ "${2:-}" = "--self-test" ]; then
   scratch=$(mktemp -d)
   trap 'rm -rf "$scratch"' EXIT
-  cp -r kernel app platform tools hil "$scratch"/
+  cp -r kernel app platform hdl tools hil tests "$scratch"/
   check "$scratch" > /dev/null || { echo "layering self-test: the clean copy already fails"; exit 1; }
-  echo '#include "gabarit/host/table_builder.hpp"' >> "$scratch/platform/linux/luma.cpp"
+  echo '#include "gabarit/host/tables/table_builder.hpp"' >> "$scratch/platform/linux/luma.cpp"
   if check "$scratch" > /dev/null; then echo "layering self-test: a planted platform -> tools include was not caught"; exit 1; fi
   cp platform/linux/luma.cpp "$scratch/platform/linux/luma.cpp"
   echo '#include "gabarit/app/args.hpp"' >> "$scratch/kernel/src/voter.cpp"
   if check "$scratch" > /dev/null; then echo "layering self-test: a planted kernel -> app include was not caught"; exit 1; fi
   cp kernel/src/voter.cpp "$scratch/kernel/src/voter.cpp"
-  echo '#include "gabarit/hil/harness.hpp"' >> "$scratch/tools/lib/src/synth.cpp"
+  echo '#include "gabarit/hil/harness.hpp"' >> "$scratch/tools/lib/src/scenes/synth.cpp"
   if check "$scratch" > /dev/null; then echo "layering self-test: a planted host -> hil include was not caught"; exit 1; fi
+  cp tools/lib/src/scenes/synth.cpp "$scratch/tools/lib/src/scenes/synth.cpp"
+  echo '#include "gabarit/host/scenes/synth.hpp"' >> "$scratch/hil/src/faults.cpp"
+  if check "$scratch" > /dev/null; then echo "layering self-test: a planted hil -> tools/lib include was not caught"; exit 1; fi
+  cp hil/src/faults.cpp "$scratch/hil/src/faults.cpp"
+  echo '#include "gabarit/host/scenes/synth.hpp"' >> "$scratch/hdl/sim/voter_harness.hpp"
+  if check "$scratch" > /dev/null; then echo "layering self-test: a planted hdl -> tools/lib include was not caught"; exit 1; fi
   echo "layering self-test: planted violations caught"
   exit 0
 fi
-if check "$PWD"; then echo "layering: kernel <- app <- {platform, tools/lib <- hil <- tools}, no other edges"; else exit 1; fi
+if check "$PWD"; then echo "layering: kernel <- app <- {platform, hdl/sim <- hil, tools/lib} <- tools <- tests, no other edges"; else exit 1; fi

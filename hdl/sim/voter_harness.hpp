@@ -25,9 +25,9 @@
 #include <vector>
 
 #include "gabarit/features.hpp"
-#include "gabarit/host/hdl_export.hpp"
+#include "gabarit/app/hdl_export.hpp"
 #include "gabarit/app/image_io.hpp"
-#include "gabarit/host/rng.hpp"
+#include "gabarit/app/rng.hpp"
 #include "gabarit/voter.hpp"
 
 namespace gabarit::hdl {
@@ -169,8 +169,8 @@ class Harness {
     ++cycle_;
   }
 
-  void load(const host::HdlLayout& l, std::uint32_t lanes) {
-    const host::HdlWidths w = host::hdl_widths(lanes, cell_capacity_, refs_per_lane_);
+  void load(const app::HdlLayout& l, std::uint32_t lanes) {
+    const app::HdlWidths w = app::hdl_widths(lanes, cell_capacity_, refs_per_lane_);
     Model& m = *model_;
     m.cell_count_i = l.cell_count;
     m.roi_width_i = l.roi_width;
@@ -180,7 +180,7 @@ class Harness {
       m.tbl_sel_i = 0;
       m.tbl_lane_i = 0;
       m.tbl_addr_i = p;
-      set_wide(m.tbl_data_i, host::hdl_offsets_word(l, p, w));
+      set_wide(m.tbl_data_i, app::hdl_offsets_word(l, p, w));
       tick();
     }
     for (std::uint32_t k = 0; k < lanes; ++k) {
@@ -194,7 +194,7 @@ class Harness {
   // One frame: start, stream `features` (col,row pairs; with probability
   // `gap` a clock passes with valid low), end, wait for the result, read back
   // `cells` counters.
-  Outcome frame(const std::vector<RoiPoint>& features, std::uint32_t cells, double gap, host::Rng& rng) {
+  Outcome frame(const std::vector<RoiPoint>& features, std::uint32_t cells, double gap, app::Rng& rng) {
     Model& m = *model_;
     Outcome o;
     const std::uint64_t start = cycle_;

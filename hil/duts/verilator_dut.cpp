@@ -25,8 +25,8 @@
 #include "gabarit/app/scratch.hpp"
 #include "gabarit/app/session_profile.hpp"
 #include "gabarit/crc32.hpp"
-#include "gabarit/host/hdl_export.hpp"
-#include "gabarit/host/rng.hpp"
+#include "gabarit/app/hdl_export.hpp"
+#include "gabarit/app/rng.hpp"
 #include "gabarit/link/cobs.hpp"
 #include "gabarit/link/dut_endpoint.hpp"
 #include "gabarit/motion_filter.hpp"
@@ -64,9 +64,9 @@ class VoterDut {
  public:
   VoterDut(const TableView& table, bool fits)
       : table_(table), fits_(fits), buffers_(table, app::VoterChoice::kCsr), voter_({}, kCells, kRefsPerLane) {
-    if (fits_) voter_.load(host::hdl_layout(table, kLanes), kLanes);
+    if (fits_) voter_.load(app::hdl_layout(table, kLanes), kLanes);
     voter_.model().cell_count_i = table.cell_count();
-    voter_.model().roi_width_i = table.roi_width() * table.orientation_channels();  // slots per row (hdl_features)
+    voter_.model().roi_width_i = table.roi_width() * table.orientation_channels();  // slots per row (app::hdl_features)
     voter_.model().roi_height_i = table.roi_height();
   }
 
@@ -90,7 +90,7 @@ class VoterDut {
       return true;
     }
     const std::vector<RoiPoint> features =
-        host::hdl_features(table_, std::span<const RoiPoint>(scratch.features).first(prepared.features));
+        app::hdl_features(table_, std::span<const RoiPoint>(scratch.features).first(prepared.features));
     hdl::Outcome hw;
     try {
       hw = voter_.frame(features, table_.cell_count(), 0.0, rng_);
@@ -134,7 +134,7 @@ class VoterDut {
   bool fits_;
   app::TrackerBuffers buffers_;
   hdl::Harness<Vvoter_hil> voter_;
-  host::Rng rng_{1};
+  app::Rng rng_{1};
   Pose pose_;
   MotionFilter grader_;
 };
@@ -165,7 +165,7 @@ int run(int argc, char** argv) {
   const TableView& t = table.view();
   bool fits = t.cell_count() <= kCells && t.roi_pixels() <= kPixels;
   if (fits) {
-    const host::HdlLayout layout = host::hdl_layout(t, kLanes);
+    const app::HdlLayout layout = app::hdl_layout(t, kLanes);
     fits = layout.max_lane_refs() <= kRefsPerLane;
   }
   if (!fits)

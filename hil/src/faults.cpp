@@ -6,7 +6,7 @@
 #include <sstream>
 
 #include "gabarit/app/error.hpp"
-#include "gabarit/host/rng.hpp"
+#include "gabarit/app/rng.hpp"
 #include "gabarit/link/rig_faults.hpp"
 
 namespace gabarit::hil {
@@ -81,7 +81,7 @@ FaultPlan read_fault_file(const std::string& path, std::uint32_t frames) {
 
 FaultPlan random_fault_plan(double probability, std::uint32_t frames, std::uint64_t seed) {
   if (!(probability >= 0.0 && probability <= 1.0)) throw app::Error("--faults random:P wants 0 <= P <= 1");
-  host::Rng rng(seed ^ 0xFA017ull);
+  app::Rng rng(seed ^ 0xFA017ull);
   FaultPlan plan;
   for (std::uint32_t f = 0; f < frames; ++f) {
     const bool hit = rng.next_unit() < probability;

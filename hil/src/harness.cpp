@@ -15,8 +15,8 @@
 #include "gabarit/app/hosted_session.hpp"
 #include "gabarit/app/scratch.hpp"
 #include "gabarit/crc32.hpp"
-#include "gabarit/host/evaluation.hpp"
-#include "gabarit/host/rng.hpp"
+#include "gabarit/app/evaluation.hpp"
+#include "gabarit/app/rng.hpp"
 #include "gabarit/link/dut_endpoint.hpp"
 #include "gabarit/link/session_report.hpp"
 #include "gabarit/tracking_session.hpp"
@@ -142,7 +142,7 @@ class Run {
   RunResult& result_;
   app::TableFile table_;
   std::uint32_t table_crc_ = 0;
-  host::Rng rng_;
+  app::Rng rng_;
   Clock::time_point t0_ = Clock::now();
   std::optional<Reference> reference_;
   link::Caps caps_;
@@ -662,7 +662,7 @@ void Run::execute() {
   } else {
     const std::string gt = (dir / "gt.csv").string();
     if (!std::filesystem::exists(gt)) throw app::Error(config_.sequence_dir + ": no gt.csv to start from; give --init");
-    const auto truth = host::read_pose_csv(gt);
+    const auto truth = app::read_pose_csv(gt);
     if (truth.empty()) throw app::Error(gt + ": no ground-truth rows to start from; give --init");
     initial = Pose{static_cast<float>(truth[0].x), static_cast<float>(truth[0].y), static_cast<float>(truth[0].theta_deg),
                    static_cast<std::uint16_t>(truth[0].depth)};

@@ -8,7 +8,7 @@
 
 #include "gabarit/app/files.hpp"
 #include "gabarit/app/pose_row.hpp"
-#include "gabarit/host/svg_plot.hpp"
+#include "gabarit/app/svg_plot.hpp"
 #include "gabarit/tracker.hpp"
 
 namespace gabarit::hil {
@@ -64,7 +64,7 @@ std::string pose_columns(const FrameRecord& r) {
 
 const char* reference_text(int reference) { return reference == 1 ? "match" : reference == 0 ? "MISMATCH" : ""; }
 
-double error_px(const FrameRecord& r, const std::map<std::uint32_t, host::PoseSample>& truth) {
+double error_px(const FrameRecord& r, const std::map<std::uint32_t, app::PoseSample>& truth) {
   const auto it = truth.find(r.frame);
   if (!r.pose || it == truth.end() || !it->second.visible) return -1;
   return std::hypot(r.pose->pose.x - it->second.x, r.pose->pose.y - it->second.y);
@@ -120,7 +120,7 @@ std::string fault_timeline(const RunResult& result) {
   const double width = 720, left = 90, right = 20, row = 22, top = 30;
   const double n = std::max<double>(1, result.frames_total);
   std::ostringstream s;
-  s << "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" << width << "\" height=\"" << top + row * 6 + 30
+  s << "<app::svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" << width << "\" height=\"" << top + row * 6 + 30
     << "\" font-family=\"sans-serif\" font-size=\"11\">\n<text x=\"" << width / 2
     << "\" y=\"16\" text-anchor=\"middle\" font-size=\"13\">Injected faults by frame (green: detected and recovered)</text>\n";
   for (int k = 0; k < 6; ++k) {
@@ -195,11 +195,11 @@ std::string frame_json(const FrameRecord& r) {
   return s.str();
 }
 
-void write_report(const std::string& dir, const RunConfig& config, const RunResult& result, const std::vector<host::PoseSample>& truth) {
+void write_report(const std::string& dir, const RunConfig& config, const RunResult& result, const std::vector<app::PoseSample>& truth) {
   std::filesystem::create_directories(dir);
   const std::filesystem::path d(dir);
-  std::map<std::uint32_t, host::PoseSample> truth_by_frame;
-  for (const host::PoseSample& t : truth) truth_by_frame[t.frame] = t;
+  std::map<std::uint32_t, app::PoseSample> truth_by_frame;
+  for (const app::PoseSample& t : truth) truth_by_frame[t.frame] = t;
   const Figures f = figures(result);
   const std::vector<Check> checks = run_checks(result);
 
@@ -232,17 +232,17 @@ void write_report(const std::string& dir, const RunConfig& config, const RunResu
 
   // Accuracy against ground truth, over the frames the run had.
   std::string accuracy = "null";
-  host::Accuracy a;
+  app::Accuracy a;
   if (!truth.empty()) {
-    std::vector<host::PoseSample> got, want;
+    std::vector<app::PoseSample> got, want;
     for (const FrameRecord& r : result.frames) {
       if (!r.pose) continue;
       got.push_back({r.frame, r.pose->pose.x, r.pose->pose.y, r.pose->pose.theta_deg, r.pose->pose.depth, true});
     }
-    for (const host::PoseSample& t : truth)
+    for (const app::PoseSample& t : truth)
       if (t.frame < result.frames_total) want.push_back(t);
-    a = host::evaluate(got, want);
-    accuracy = host::accuracy_json(a);
+    a = app::evaluate(got, want);
+    accuracy = app::accuracy_json(a);
     while (!accuracy.empty() && (accuracy.back() == '\n' || accuracy.back() == ' ')) accuracy.pop_back();
   }
 
@@ -347,7 +347,7 @@ void write_report(const std::string& dir, const RunConfig& config, const RunResu
   app::write_file((d / "junit.xml").string(), j.str());
 
   // Plots and the Markdown report.
-  std::vector<host::svg::Series> error_series(1), trajectory(2), histogram(1);
+  std::vector<app::svg::Series> error_series(1), trajectory(2), histogram(1);
   error_series[0].label = "pose error (px)";
   trajectory[0].label = "truth";
   trajectory[1].label = "DUT";
@@ -356,16 +356,16 @@ void write_report(const std::string& dir, const RunConfig& config, const RunResu
     if (e >= 0) error_series[0].x.push_back(r.frame), error_series[0].y.push_back(e);
     if (r.pose) trajectory[1].x.push_back(r.pose->pose.x), trajectory[1].y.push_back(-r.pose->pose.y);
   }
-  for (const host::PoseSample& t : truth)
+  for (const app::PoseSample& t : truth)
     if (t.frame < result.frames_total) trajectory[0].x.push_back(t.x), trajectory[0].y.push_back(-t.y);
   std::vector<std::string> plots;
   if (!error_series[0].x.empty()) {
-    host::svg::write((d / "error.svg").string(), host::svg::lines("Pose error against ground truth", "frame", "error (px)", error_series, false, false));
+    app::svg::write((d / "error.svg").string(), app::svg::lines("Pose error against ground truth", "frame", "error (px)", error_series, false, false));
     plots.push_back("error.svg");
   }
   if (!trajectory[1].x.empty()) {
     if (trajectory[0].x.empty()) trajectory.erase(trajectory.begin());
-    host::svg::write((d / "trajectory.svg").string(), host::svg::lines("Trajectory (y up)", "x (px)", "-y (px)", trajectory, false, false));
+    app::svg::write((d / "trajectory.svg").string(), app::svg::lines("Trajectory (y up)", "x (px)", "-y (px)", trajectory, false, false));
     plots.push_back("trajectory.svg");
   }
   std::vector<double> latencies;
@@ -378,10 +378,10 @@ void write_report(const std::string& dir, const RunConfig& config, const RunResu
     for (double v : latencies) ++counts[static_cast<std::size_t>(std::min(bins - 1, static_cast<int>(v / (top + 1e-9) * bins)))];
     histogram[0].label = "frames (p50 " + num(f.latency.p50, 0) + ", p99 " + num(f.latency.p99, 0) + ", max " + num(f.latency.max, 0) + " us)";
     for (int b = 0; b < bins; ++b) histogram[0].x.push_back((b + 0.5) * top / bins), histogram[0].y.push_back(counts[static_cast<std::size_t>(b)]);
-    host::svg::write((d / "latency.svg").string(), host::svg::lines("Latency, frame sent to pose received", "latency (us)", "frames", histogram, false, false));
+    app::svg::write((d / "latency.svg").string(), app::svg::lines("Latency, frame sent to pose received", "latency (us)", "frames", histogram, false, false));
     plots.push_back("latency.svg");
   }
-  host::svg::write((d / "faults.svg").string(), fault_timeline(result));
+  app::svg::write((d / "faults.svg").string(), fault_timeline(result));
   plots.push_back("faults.svg");
 
   std::ostringstream m;

@@ -34,7 +34,7 @@ std::string slurp(const fs::path& p) {
 }
 
 std::vector<std::byte> small_table() {
-  host::Rng rng(5);
+  app::Rng rng(5);
   return testing::build(testing::point_model(testing::random_points(rng, 16, 6)), "-2:2:5", "-2:2:5");
 }
 

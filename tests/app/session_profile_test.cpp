@@ -16,9 +16,9 @@
 #include "gabarit/app/hosted_session.hpp"
 #include "gabarit/app/image_io.hpp"
 #include "gabarit/app/session_profile_io.hpp"
-#include "gabarit/host/model.hpp"
-#include "gabarit/host/scene_synth.hpp"
-#include "gabarit/host/evaluation.hpp"
+#include "gabarit/host/tables/model.hpp"
+#include "gabarit/host/scenes/scene_synth.hpp"
+#include "gabarit/app/evaluation.hpp"
 #include "gabarit/link/protocol.hpp"
 #include "test_tables.hpp"
 
@@ -198,7 +198,7 @@ TEST(SessionProfile, FirmwareTwinMatchesTheHostedSessionBitForBit) {
   std::vector<std::uint8_t> mask(tracker_mask_bytes(table));
   const TrackerScratch fine{features, counters, mask};
 
-  const auto truth = host::read_pose_csv((dir / "gt.csv").string());
+  const auto truth = app::read_pose_csv((dir / "gt.csv").string());
   const Pose start{static_cast<float>(truth[0].x), static_cast<float>(truth[0].y), static_cast<float>(truth[0].theta_deg), 0};
   ASSERT_TRUE(twin.start(start));
   ASSERT_TRUE(hosted.start(start));

@@ -12,11 +12,11 @@
 
 #include "gabarit/app/files.hpp"
 #include "gabarit/byte_order.hpp"
-#include "gabarit/host/model.hpp"
-#include "gabarit/host/rng.hpp"
-#include "gabarit/host/state_space.hpp"
-#include "gabarit/host/synth.hpp"
-#include "gabarit/host/table_builder.hpp"
+#include "gabarit/host/tables/model.hpp"
+#include "gabarit/app/rng.hpp"
+#include "gabarit/host/tables/state_space.hpp"
+#include "gabarit/host/scenes/synth.hpp"
+#include "gabarit/host/tables/table_builder.hpp"
 #include "gabarit/table_view.hpp"
 
 namespace {
@@ -72,7 +72,7 @@ int main(int argc, char** argv) {
   }
   const std::filesystem::path dir = argv[1];
   std::filesystem::create_directories(dir);
-  host::Rng rng(7);
+  app::Rng rng(7);
   std::vector<host::Point> curve = host::random_closed_curve(40, 3);
   const auto binary = table_format::DetectorKind::kBinary, gradient = table_format::DetectorKind::kGradientRows,
              canny = table_format::DetectorKind::kCanny;

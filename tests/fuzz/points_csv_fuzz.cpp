@@ -5,7 +5,7 @@
 #include <string>
 
 #include "gabarit/app/error.hpp"
-#include "gabarit/host/model.hpp"
+#include "gabarit/host/tables/model.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   std::istringstream in(std::string(reinterpret_cast<const char*>(data), size));

@@ -8,14 +8,14 @@
 #include <string>
 
 #include "gabarit/app/error.hpp"
-#include "gabarit/host/evaluation.hpp"
+#include "gabarit/app/evaluation.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   std::istringstream in(std::string(reinterpret_cast<const char*>(data), size));
   try {
-    const auto poses = gabarit::host::read_pose_csv(in, "fuzz.csv");
-    const gabarit::host::Accuracy a = gabarit::host::evaluate(poses, poses);
-    const std::string json = gabarit::host::accuracy_json(a);
+    const auto poses = gabarit::app::read_pose_csv(in, "fuzz.csv");
+    const gabarit::app::Accuracy a = gabarit::app::evaluate(poses, poses);
+    const std::string json = gabarit::app::accuracy_json(a);
     if (json.find("nan") != std::string::npos || json.find("inf") != std::string::npos) std::abort();
     if (!std::isfinite(a.mean_error_px) || !std::isfinite(a.max_error_deg)) std::abort();
   } catch (const gabarit::app::Error&) {

@@ -73,15 +73,15 @@ TEST(VoterAxiLite, LoadsTablesVotesAndReportsThroughRegistersOnly) {
   AxiMaster bus;
   EXPECT_EQ(bus.read(0x54), 0x47425431u);
   EXPECT_EQ(bus.read(0x58) >> 24, kLanes);
-  host::Rng rng(5);
+  app::Rng rng(5);
   for (int table = 0; table < 3; ++table) {
     const auto bytes = testing::build(testing::point_model(testing::random_points(rng, 12, 6)), "-3:3:7", "-2:2:5", "0:0:1",
                                       table == 0 ? 1.0 : 0.6, table + 1u);
     const TableView t = testing::open_table(bytes);
     ASSERT_LE(t.cell_count(), kCells);
     ASSERT_LE(t.roi_pixels(), kPixels);
-    const host::HdlLayout l = host::hdl_layout(t, kLanes);
-    const host::HdlWidths w = host::hdl_widths(kLanes, kCells, kRefs);
+    const app::HdlLayout l = app::hdl_layout(t, kLanes);
+    const app::HdlWidths w = app::hdl_widths(kLanes, kCells, kRefs);
     bus.write(0x0C, t.cell_count());
     bus.write(0x10, (std::uint32_t{t.roi_height()} << 16) | t.roi_width());
     const auto load = [&](std::uint32_t sel, std::uint32_t lane, std::uint32_t addr, const std::vector<std::uint32_t>& data) {
@@ -90,7 +90,7 @@ TEST(VoterAxiLite, LoadsTablesVotesAndReportsThroughRegistersOnly) {
       for (std::size_t i = 0; i < data.size(); ++i) bus.write(static_cast<std::uint8_t>(0x40 + 4 * i), data[i]);
       bus.write(0x50, 1);
     };
-    for (std::uint32_t p = 0; p < t.roi_pixels(); ++p) load(0, 0, p, host::hdl_offsets_word(l, p, w));
+    for (std::uint32_t p = 0; p < t.roi_pixels(); ++p) load(0, 0, p, app::hdl_offsets_word(l, p, w));
     for (std::uint32_t k = 0; k < kLanes; ++k) {
       for (std::uint32_t i = 0; i < l.refs[k].size(); ++i) load(1, k, i, {l.refs[k][i]});
       for (std::uint32_t i = 0; i < l.sizes[k].size(); ++i) load(2, k, i, {l.sizes[k][i]});

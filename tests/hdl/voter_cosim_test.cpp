@@ -21,11 +21,11 @@
 #include "Vvoter_l1.h"
 #include "Vvoter_l4.h"
 #include "gabarit/app/image_io.hpp"
-#include "gabarit/host/model.hpp"
-#include "gabarit/host/table_builder.hpp"
-#include "gabarit/host/voter_trials.hpp"
+#include "gabarit/host/tables/model.hpp"
+#include "gabarit/host/tables/table_builder.hpp"
+#include "gabarit/host/runs/voter_trials.hpp"
 #include "gabarit/features.hpp"
-#include "gabarit/host/thesis_shapes.hpp"
+#include "gabarit/host/scenes/thesis_shapes.hpp"
 #include "test_tables.hpp"
 #include "voter_harness.hpp"
 
@@ -44,7 +44,7 @@ struct RandomTable {
 };
 
 RandomTable random_table(std::uint64_t seed) {
-  host::Rng rng(seed);
+  app::Rng rng(seed);
   for (;;) {
     const auto pts = testing::random_points(rng, 1 + rng.next_u32() % 30, 2 + static_cast<std::int32_t>(rng.next_u32() % 14));
     const std::uint32_t xc = 1 + rng.next_u32() % 16, yc = 1 + rng.next_u32() % 16, tc = 1 + rng.next_u32() % 2;
@@ -59,7 +59,7 @@ RandomTable random_table(std::uint64_t seed) {
   }
 }
 
-std::vector<RoiPoint> random_features(host::Rng& rng, const TableView& t, std::size_t n) {
+std::vector<RoiPoint> random_features(app::Rng& rng, const TableView& t, std::size_t n) {
   std::vector<RoiPoint> f(n);
   for (auto& p : f) p = {static_cast<std::uint16_t>(rng.next_u32() % t.roi_width()), static_cast<std::uint16_t>(rng.next_u32() % t.roi_height())};
   return f;
@@ -70,8 +70,8 @@ void replay_with_trace(const char* model, const RandomTable& t, std::uint32_t la
                        std::uint64_t frame_seed) {
   const std::string path = std::string("hdl_mismatch_") + model + "_table" + std::to_string(t.seed) + ".fst";
   Harness<Model> h(path);
-  h.load(host::hdl_layout(t.view, lanes), lanes);
-  host::Rng rng(frame_seed);
+  h.load(app::hdl_layout(t.view, lanes), lanes);
+  app::Rng rng(frame_seed);
   (void)h.frame(f, t.view.cell_count(), gap, rng);
   std::printf("waveform of the failing frame: %s\n", std::filesystem::absolute(path).c_str());
 }
@@ -93,14 +93,14 @@ void random_cosim(const char* model, std::uint32_t lanes) {
     Harness<Model> h;
     for (std::size_t i = 0; i < tables; ++i) {
       RandomTable t = random_table(1000 + i);
-      h.load(host::hdl_layout(t.view, lanes), lanes);
-      host::Rng rng(t.seed * 7 + lanes);
+      h.load(app::hdl_layout(t.view, lanes), lanes);
+      app::Rng rng(t.seed * 7 + lanes);
       for (std::size_t fr = 0; fr < frames; ++fr) {
         const std::uint64_t frame_seed = rng.next_u64();
-        host::Rng frame_rng(frame_seed);
+        app::Rng frame_rng(frame_seed);
         const auto f = random_features(frame_rng, t.view, frame_rng.next_u32() % 6000);
         const double gap = fr == 0 ? 0.0 : 0.3;
-        host::Rng valid_rng(frame_seed);
+        app::Rng valid_rng(frame_seed);
         const Outcome hw = h.frame(f, t.view.cell_count(), gap, valid_rng);
         const Outcome sw = kernel_outcome(t.view, f);
         const std::string diff = compare(hw, sw);
@@ -145,13 +145,13 @@ void sequence_cosim(const char* model, std::uint32_t lanes, double min_votes_per
   TableView t;
   ASSERT_EQ(TableView::open(bytes, t), Status::kOk);
   Harness<Model> h;
-  h.load(host::hdl_layout(t, lanes), lanes);
+  h.load(app::hdl_layout(t, lanes), lanes);
   std::uint64_t votes = 0, vote_cycles = 0;
   for (double noise : {0.2, 0.4}) {
     const auto trials = host::make_trials(shape, noise, 25, 99);
     for (std::size_t i = 0; i < trials.size(); ++i) {
       const auto f = trial_features(t, trials[i].frame, trials[i].previous.x, trials[i].previous.y);
-      host::Rng rng(i);
+      app::Rng rng(i);
       const Outcome hw = h.frame(f, t.cell_count(), 0.0, rng);
       const Outcome sw = kernel_outcome(t, f);
       ASSERT_EQ(compare(hw, sw), "") << model << ", noise " << noise << ", frame " << i;
@@ -176,8 +176,8 @@ TEST(VoterCosim, CountersSaturateAndExtraFeaturesRaiseOverflow) {
   const auto bytes = testing::build(testing::point_model({{0, 0}, {1, 0}, {4, 2}}), "-1:1:3", "0:0:1");
   const TableView t = testing::open_table(bytes);
   Harness<Vvoter_l1> h;
-  h.load(host::hdl_layout(t, 1), 1);
-  host::Rng rng(1);
+  h.load(app::hdl_layout(t, 1), 1);
+  app::Rng rng(1);
   std::vector<RoiPoint> f(70000, RoiPoint{2, 0});
   const Outcome hw = h.frame(f, t.cell_count(), 0.0, rng);
   const Outcome sw = kernel_outcome(t, f);
@@ -193,8 +193,8 @@ TEST(VoterCosim, FeaturesOutsideTheRoiAreDroppedAndFlagged) {
   const auto bytes = testing::build(testing::point_model({{0, 0}, {3, 1}}), "-2:2:5", "-1:1:3");
   const TableView t = testing::open_table(bytes);
   Harness<Vvoter_l4> h;
-  h.load(host::hdl_layout(t, 4), 4);
-  host::Rng rng(2);
+  h.load(app::hdl_layout(t, 4), 4);
+  app::Rng rng(2);
   std::vector<RoiPoint> inside = random_features(rng, t, 200);
   std::vector<RoiPoint> mixed = inside;
   mixed.insert(mixed.begin() + 50, RoiPoint{t.roi_width(), 0});
@@ -214,8 +214,8 @@ TEST(VoterCosim, TablesWithFewerCellsThanLanes) {
     const auto bytes = testing::build(testing::point_model({{0, 0}, {2, 1}}), x, "0:0:1");
     const TableView t = testing::open_table(bytes);
     Harness<Vvoter_l4> h;
-    h.load(host::hdl_layout(t, 4), 4);
-    host::Rng rng(3);
+    h.load(app::hdl_layout(t, 4), 4);
+    app::Rng rng(3);
     for (int frame = 0; frame < 4; ++frame) {
       const auto f = random_features(rng, t, frame * 3);
       EXPECT_EQ(compare(h.frame(f, t.cell_count(), 0.0, rng), kernel_outcome(t, f)), "") << x << " frame " << frame;
@@ -249,8 +249,8 @@ TEST(VoterCosim, OrientationChannelTables) {
     const TableView t = testing::open_table(bytes);
     ASSERT_LE(t.roi_slots(), kPixelCapacity);
     Harness<Vvoter_l4> h;
-    h.load(host::hdl_layout(t, 4), 4);
-    host::Rng rng(channels);
+    h.load(app::hdl_layout(t, 4), 4);
+    app::Rng rng(channels);
     for (int frame = 0; frame < 6; ++frame) {
       std::vector<RoiPoint> f(static_cast<std::size_t>(5 + frame * 7));
       for (auto& p : f) {  // kernel encoding: column, channel, upper half
@@ -260,7 +260,7 @@ TEST(VoterCosim, OrientationChannelTables) {
       }
       Outcome sw = kernel_outcome(t, f);
       sw.features *= 2;
-      EXPECT_EQ(compare(h.frame(host::hdl_features(t, f), t.cell_count(), 0.0, rng), sw), "") << channels << " channels, frame " << frame;
+      EXPECT_EQ(compare(h.frame(app::hdl_features(t, f), t.cell_count(), 0.0, rng), sw), "") << channels << " channels, frame " << frame;
     }
   }
 }

@@ -4,10 +4,10 @@
 #include <gtest/gtest.h>
 
 #include "Vvoter_preload.h"
-#include "gabarit/host/voter_trials.hpp"
+#include "gabarit/host/runs/voter_trials.hpp"
 #include "gabarit/features.hpp"
 #include "gabarit/app/files.hpp"
-#include "gabarit/host/thesis_shapes.hpp"
+#include "gabarit/host/scenes/thesis_shapes.hpp"
 #include "voter_harness.hpp"
 
 namespace gabarit::hdl {
@@ -25,7 +25,7 @@ TEST(VoterPreload, ExportedImagesLoadedByReadmemhVoteLikeTheKernel) {
   const auto trials = host::make_trials(shape, 0.3, 10, 5);
   for (std::size_t i = 0; i < trials.size(); ++i) {
     const auto f = trial_features(t, trials[i].frame, trials[i].previous.x, trials[i].previous.y);
-    host::Rng rng(i);
+    app::Rng rng(i);
     EXPECT_EQ(compare(h.frame(f, t.cell_count(), 0.1, rng), kernel_outcome(t, f)), "") << "frame " << i;
   }
 }

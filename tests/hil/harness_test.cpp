@@ -11,8 +11,8 @@
 
 #include "gabarit/app/error.hpp"
 #include "gabarit/app/files.hpp"
-#include "gabarit/host/synth.hpp"
-#include "gabarit/host/table_builder.hpp"
+#include "gabarit/host/scenes/synth.hpp"
+#include "gabarit/host/tables/table_builder.hpp"
 #include "gabarit/hil/board_map.hpp"
 #include "gabarit/hil/dut.hpp"
 #include "gabarit/hil/faults.hpp"
@@ -353,7 +353,7 @@ TEST(HilReport, WritesEveryFileWithATestcasePerCheckAndFault) {
   c.faults = read_fault_file(write_temp("two", "5 drop\n9 bitflip\n"), c.max_frames);
   const RunResult r = run_hil(c, *dut);
   const std::string dir = (fs::temp_directory_path() / ("gabarit_hil_report_" + std::to_string(::getpid()))).string();
-  write_report(dir, c, r, host::read_pose_csv(sequence().dir + "/gt.csv"));
+  write_report(dir, c, r, app::read_pose_csv(sequence().dir + "/gt.csv"));
   for (const char* f : {"frames.csv", "poses.csv", "summary.json", "junit.xml", "faults.csv", "report.md", "error.svg",
                         "trajectory.svg", "latency.svg", "faults.svg"})
     EXPECT_TRUE(fs::exists(fs::path(dir) / f)) << f;
@@ -366,7 +366,7 @@ TEST(HilReport, WritesEveryFileWithATestcasePerCheckAndFault) {
   EXPECT_NE(xml.find("fault.1.bitflip.frame9"), std::string::npos);
   EXPECT_NE(xml.find("latency_us.p99"), std::string::npos);
   // poses.csv is gabarit track's format: gabarit eval reads it.
-  const auto poses = host::read_pose_csv((fs::path(dir) / "poses.csv").string());
+  const auto poses = app::read_pose_csv((fs::path(dir) / "poses.csv").string());
   EXPECT_EQ(poses.size(), 118u);
   EXPECT_EQ(read_fault_file((fs::path(dir) / "faults.csv").string(), 120).faults.size(), 2u);
   fs::remove_all(dir);

@@ -30,7 +30,7 @@ const std::pair<const char*, const char*> kSpaces[] = {
 };
 
 TEST(DenseVoter, MatchesTheCsrVoterBitForBit) {
-  host::Rng rng(31);
+  app::Rng rng(31);
   for (const auto& [x, y] : kSpaces) {
     const auto bytes = testing::build(testing::point_model(testing::random_points(rng, 6, 6)), x, y);
     const TableView t = testing::open_table(bytes);
@@ -69,7 +69,7 @@ TEST(DenseVoter, SaturatesLikeTheCsrVoterAcrossBlocks) {
 }
 
 TEST(DenseVoter, TrackingStepsAreIdenticalWithEitherVoter) {
-  host::Rng rng(12);
+  app::Rng rng(12);
   const auto pts = testing::random_points(rng, 70, 15);
   const auto bytes = testing::build(testing::point_model(pts), "-4:4:9", "-4:4:9", "-6:6:3");
   const TableView t = testing::open_table(bytes);

@@ -63,7 +63,7 @@ double angle_error(double a, double b) { return std::fabs(std::remainder(a - b, 
 TEST(ModelFinder, FindsTheTargetAnywhereAtAnyAngle) {
   Finding t;
   auto& [rig, finder, options, buffers, fine] = t;
-  host::Rng where(5), noise(6);
+  app::Rng where(5), noise(6);
   for (int trial = 0; trial < 8; ++trial) {
     const float x = static_cast<float>((40 + where.next_unit() * (kSide - 80))), y = static_cast<float>((40 + where.next_unit() * (kSide - 80)));
     const float theta = static_cast<float>((-180 + 360 * where.next_unit()));
@@ -88,7 +88,7 @@ TEST(ModelFinder, FindsTheTargetAnywhereAtAnyAngle) {
 TEST(ModelFinder, NothingFoundWhereThereIsNothing) {
   Finding t;
   auto& [rig, finder, options, buffers, fine] = t;
-  host::Rng noise(8);
+  app::Rng noise(8);
   std::vector<Detection> out(options.max_count);
   std::uint32_t count = 7;
   const app::GrayImage f = rig.frame(0, 0, 0, false, noise);
@@ -99,7 +99,7 @@ TEST(ModelFinder, NothingFoundWhereThereIsNothing) {
 TEST(ModelFinder, SameInputSameBytes) {
   Finding t;
   auto& [rig, finder, options, buffers, fine] = t;
-  host::Rng noise(9);
+  app::Rng noise(9);
   const app::GrayImage f = rig.frame(150, 170, 77, true, noise);
   std::vector<Detection> a(options.max_count), b(options.max_count);
   std::uint32_t na = 0, nb = 0;
@@ -112,7 +112,7 @@ TEST(ModelFinder, SameInputSameBytes) {
 TEST(ModelFinder, RefusesBadInputAndShortBuffers) {
   Finding t;
   auto& [rig, finder, options, buffers, fine] = t;
-  host::Rng noise(10);
+  app::Rng noise(10);
   const app::GrayImage f = rig.frame(100, 100, 0, true, noise);
   std::vector<Detection> out(options.max_count);
   std::uint32_t count = 0;
@@ -155,7 +155,7 @@ int reacquire(const Rig& rig, bool detection, float rx, float ry, int budget = 1
   app::FinderBuffers buffers(rig.table, detector_of(rig.table), options, kSide, kSide);
   DetectionRecovery stage(finder, options, buffers.scratch(scratch.view()));
   if (detection) session.use_detection_recovery(&stage);
-  host::Rng noise(4);
+  app::Rng noise(4);
   SessionResult r;
   for (int f = 0; f < 4; ++f) EXPECT_EQ(session.step(rig.frame(60, 60, 0, true, noise).view(), {scratch.view(), {}}, r), Status::kOk);
   for (int f = 0; f < 12; ++f) EXPECT_EQ(session.step(rig.frame(0, 0, 0, false, noise).view(), {scratch.view(), {}}, r), Status::kOk);

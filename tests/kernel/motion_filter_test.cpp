@@ -106,7 +106,7 @@ TEST(MotionFilter, PredictsUpdatesAndCoastsByTheKalmanEquations) {
 // The gate: a better-ranked cell far from the prediction is a distractor and
 // is skipped; with none inside the gate there is no measurement.
 TEST(MotionFilter, TheGateSkipsADistractorOutsideIt) {
-  host::Rng rng(4);
+  app::Rng rng(4);
   const auto bytes = build(point_model(testing::random_points(rng, 30, 10)), "-10:10:21", "0:0:1");
   const TableView t = testing::open_table(bytes);
   std::vector<VoteCounter> counters(t.cell_count(), 0);

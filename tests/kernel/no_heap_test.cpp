@@ -86,7 +86,7 @@ void expect_no_allocation(const char* what, F&& f) {
 
 int main() {
   using namespace gabarit;
-  host::Rng rng(1);
+  app::Rng rng(1);
   const auto pts = testing::random_points(rng, 50, 12);
   const auto bytes = testing::build(testing::point_model(pts), "-4:4:9", "-4:4:9", "-4:4:3");
   TableView table;

@@ -23,7 +23,7 @@ using app::GrayImage;
 
 TEST(ParticleRng, IsSplitMix64AndItsNormalsHaveUnitVariance) {
   ParticleRng a(7), b(7);
-  host::Rng reference(7);
+  app::Rng reference(7);
   for (int i = 0; i < 100; ++i) {
     const std::uint64_t v = a.next();
     EXPECT_EQ(v, reference.next_u64());
@@ -44,7 +44,7 @@ TEST(ParticleRng, IsSplitMix64AndItsNormalsHaveUnitVariance) {
 }
 
 TEST(ParticleSort, OrdersByWeightHeaviestFirstTiesByIndex) {
-  host::Rng rng(3);
+  app::Rng rng(3);
   for (const std::uint32_t n : {1u, 2u, 7u, 255u, 256u, 1000u, 4097u}) {
     std::vector<Particle> ps(n);
     for (std::uint32_t i = 0; i < n; ++i) ps[i].weight = static_cast<float>(rng.uniform_int(0, 20)) * 0.125f;  // many ties
@@ -65,12 +65,12 @@ struct Scene {
   std::vector<std::byte> bytes;
   TableView table;
   Scene() {
-    host::Rng rng(11);
+    app::Rng rng(11);
     points = testing::random_points(rng, 60, 20, 2.0);
     bytes = testing::build(testing::point_model(points), "-5:5:11", "-5:5:11", "-2:2:5");
     table = testing::open_table(bytes);
   }
-  GrayImage frame(float x, float y, float theta, host::Rng* noise = nullptr, double p = 0.0) const {
+  GrayImage frame(float x, float y, float theta, app::Rng* noise = nullptr, double p = 0.0) const {
     GrayImage g = testing::draw_points(points, x, y, theta, 160);
     if (noise != nullptr)
       for (auto& v : g.pixels)
@@ -88,7 +88,7 @@ struct EdgeBuffers {
 
 TEST(EdgeMapLoader, StripsGiveTheBitsOneWindowDoesAndNearLooksAround) {
   const Scene s;
-  host::Rng noise(5);
+  app::Rng noise(5);
   const GrayImage g = s.frame(80, 80, 10, &noise, 0.05);
   const Detector binary{table_format::DetectorKind::kBinary, 0};
   EdgeBuffers one_strip(160 * 160), narrow(160);  // the whole window at once; one row per strip
@@ -175,7 +175,7 @@ RunResult run(const Scene& s, Which which, const ParticleFilterOptions& o, std::
     std::vector<std::uint32_t> order(2 * particles);
     float x = 80, y = 80, theta = 0;
     EXPECT_EQ(filter.start(o, {x, y, theta, 0}, 1, seed, {cloud, next, order}), Status::kOk);
-    host::Rng noise(seed + 100);
+    app::Rng noise(seed + 100);
     RunResult r;
     std::uint32_t crc = 0;
     for (int f = 0; f < frames; ++f) {

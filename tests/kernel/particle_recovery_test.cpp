@@ -38,7 +38,7 @@ int reacquire(const Rig& rig, bool particles, float rx, float ry, int budget = 1
   EXPECT_EQ(filter.start({}, {60, 60, 0, 0}, 1, 3, {cloud, next, order}), Status::kOk);
   ParticleRecovery stage(rig.table, binary, filter);
   if (particles) session.use_particle_recovery(&stage);
-  host::Rng noise(4);
+  app::Rng noise(4);
   SessionResult r;
   for (int f = 0; f < 4; ++f) EXPECT_EQ(session.step(rig.frame(60, 60, 0, true, noise).view(), {scratch.view(), {}}, r), Status::kOk);
   for (int f = 0; f < 20; ++f) EXPECT_EQ(session.step(rig.frame(0, 0, 0, false, noise).view(), {scratch.view(), {}}, r), Status::kOk);
@@ -73,7 +73,7 @@ TEST(ParticleRecovery, BadOptionsAreRefused) {
   EdgeCorrelationMeasure m(rig.table, loader, 1, 0);
   EdgeParticleFilter filter(m, nullptr, &loader);
   testing::TrackerTestScratch scratch(rig.table);
-  host::Rng noise(1);
+  app::Rng noise(1);
   const app::GrayImage g = rig.frame(60, 60, 0, true, noise);
   SearchResult out;
   ParticleRecovery unstarted(rig.table, detector_of(rig.table), filter);

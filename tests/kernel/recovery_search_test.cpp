@@ -37,7 +37,7 @@ TEST(TrackingSession, TheMotionFilterFollowsSmoothMotionAndRecoversAfterAnOcclus
   for (const RecoveryCase c : {RecoveryCase{"full grid, track_step", false, 0, 1, 31}, RecoveryCase{"full grid, screened", true, 0, 1, 31},
                                RecoveryCase{"budget 24", true, 24, 1, 32}, RecoveryCase{"every 3rd frame", true, 0, 3, 33}}) {
   SCOPED_TRACE(c.name);
-  host::Rng rng(12);
+  app::Rng rng(12);
   const auto pts = testing::random_points(rng, 80, 14);
   const auto bytes = build(point_model(pts), "-4:4:9", "-4:4:9");
   const TableView t = testing::open_table(bytes);
@@ -85,7 +85,7 @@ TEST(TrackingSession, TheMotionFilterFollowsSmoothMotionAndRecoversAfterAnOcclus
 // pixels, rounded once when drawn and again when rotated into the table
 // frame, match a rotated stencil far worse than edges in real images do.)
 TEST(TrackingSession, RecoveryFindsATargetThatTurnedWhileHidden) {
-  host::Rng rng(31);
+  app::Rng rng(31);
   std::vector<host::Point> pts;
   for (const host::Point& c : testing::random_points(rng, 60, 48, 5.0))
     for (std::int32_t dy = -1; dy <= 1; ++dy)
@@ -116,7 +116,7 @@ TEST(TrackingSession, RecoveryFindsATargetThatTurnedWhileHidden) {
 // table's +-4 px) is the result of the first search; an interval of 2 makes
 // every other lost frame a frame between searches.
 TEST(RecoverySearch, FindsATargetBeyondTheTableAndKeepsItsInterval) {
-  host::Rng rng(12);
+  app::Rng rng(12);
   const auto pts = testing::random_points(rng, 80, 14);
   const auto bytes = build(point_model(pts), "-4:4:9", "-4:4:9");
   const TableView t = testing::open_table(bytes);
@@ -152,7 +152,7 @@ TEST(RecoverySearch, FindsATargetBeyondTheTableAndKeepsItsInterval) {
 // frame instead (and the turn within half a turn), so a target that
 // reappears near where the motion led is found.
 TEST(RecoverySearch, ALongLostPeriodKeepsSearchingInsideTheFrame) {
-  host::Rng rng(12);
+  app::Rng rng(12);
   const auto pts = testing::random_points(rng, 80, 14);
   const auto bytes = build(point_model(pts), "-4:4:9", "-4:4:9");
   const TableView t = testing::open_table(bytes);

@@ -19,7 +19,7 @@ using testing::point_model;
 using Scratch = testing::TrackerTestScratch;
 
 TEST(Refinement, AParabolaThroughThePeakFindsTheSubCellOffset) {
-  host::Rng rng(3);
+  app::Rng rng(3);
   const auto pts = testing::random_points(rng, 40, 12);
   const auto bytes = build(point_model(pts), "-3:3:7", "-3:3:7");
   const TableView t = testing::open_table(bytes);
@@ -55,7 +55,7 @@ TEST(Refinement, AParabolaThroughThePeakFindsTheSubCellOffset) {
 // offset; the model one pixel to the right gives +1, clamped to half a cell;
 // too few features, or short scratch, give none (and false).
 TEST(Refinement, AligningTheFeaturesFindsTheirOffsetWithinTheCell) {
-  host::Rng rng(9);
+  app::Rng rng(9);
   const auto pts = testing::random_points(rng, 40, 10);
   const auto bytes = build(point_model(pts), "-2:2:5", "-2:2:5");
   const TableView t = testing::open_table(bytes);

@@ -26,7 +26,7 @@ using testing::reseal;
 // A small table with one u32 offset per pixel (format 1.0), which the
 // crafted-payload tests below edit in place.
 std::vector<std::byte> small_table(bool compact = false) {
-  host::Rng rng(11);
+  app::Rng rng(11);
   host::BuildOptions o;
   o.space.x = host::parse_axis("-2:2:5", "x");
   o.space.y = host::parse_axis("-1:1:3", "y");
@@ -49,7 +49,7 @@ Status open_copy(const std::vector<std::byte>& bytes) {
 }
 
 TEST(TableView, OpensAWellFormedTableAndReadsItBack) {
-  host::Rng rng(3);
+  app::Rng rng(3);
   const auto pts = testing::random_points(rng, 20, 8);
   const auto bytes = build(point_model(pts), "-3:3:7", "-2:2:5");
   const TableView t = testing::open_table(bytes);
@@ -143,7 +143,7 @@ TEST(TableView, RejectsOtherVersionsButAcceptsANewerMinor) {
 // Format 1.1: a table built from images carries them, one per depth, after
 // the model points; a crafted size or offset is refused.
 TEST(TableView, CarriesTheModelImagesOfATableBuiltFromImages) {
-  host::Rng rng(5);
+  app::Rng rng(5);
   host::ModelStack model = point_model(testing::random_points(rng, 12, 6));
   model.depths.push_back(model.depths[0]);
   model.image_width = 7;
@@ -316,7 +316,7 @@ TEST(TableView, RejectsFieldsBeyondTheLimitsWithAValidChecksum) {
 // maximum) right; the per-cell count still catches it. Accepted, the first
 // cell's score could pass 1 and a clutter frame report "tracking".
 TEST(TableView, RejectsACellReferencedOtherThanItsStencilSize) {
-  host::Rng rng(11);
+  app::Rng rng(11);
   host::BuildOptions o;  // decimated in one global pass, so stencil sizes differ
   o.space.x = host::parse_axis("-2:2:5", "x");
   o.space.y = host::parse_axis("-1:1:3", "y");
@@ -402,7 +402,7 @@ TEST(TableView, RejectsCraftedPayloadsWithAValidChecksum) {
 
 TEST(TableView, RandomResealedCorruptionNeverCrashesAndWhatOpensIsUsable) {
   const auto good = small_table();
-  host::Rng rng(2024);
+  app::Rng rng(2024);
   std::set<Status> seen;
   for (int round = 0; round < 3000; ++round) {
     auto bad = good;

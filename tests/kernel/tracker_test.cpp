@@ -23,7 +23,7 @@ GrayImage draw(const std::vector<host::Point>& pts, float x, float y, float thet
 }
 
 TEST(Tracker, FindsATranslationExactly) {
-  host::Rng rng(21);
+  app::Rng rng(21);
   const auto pts = testing::random_points(rng, 60, 15);
   const auto bytes = build(point_model(pts), "-5:5:11", "-5:5:11");
   const TableView t = testing::open_table(bytes);
@@ -60,7 +60,7 @@ TEST(Tracker, ReportsLostOnAnEmptyFrameAndUncertainOnATie) {
 }
 
 TEST(Tracker, EstimatesRotationAndTracksInTheRotatedFrame) {
-  host::Rng rng(8);
+  app::Rng rng(8);
   const auto pts = testing::random_points(rng, 80, 14, 1.5);
   const auto bytes = build(point_model(pts), "-3:3:7", "-3:3:7", "-10:10:5");
   const TableView t = testing::open_table(bytes);
@@ -127,7 +127,7 @@ namespace {
 // at any angle and wherever the ROI sits in the window, even half outside
 // the image.
 TEST(MapFeatures, MatchesPrepareFrameForAWindowIndependentDetector) {
-  host::Rng rng(77);
+  app::Rng rng(77);
   const auto pts = testing::random_points(rng, 40, 12);
   const auto bytes = build(point_model(pts), "-3:3:7", "-3:3:7", "-1.5:1.5:3");
   const TableView t = testing::open_table(bytes);
@@ -158,7 +158,7 @@ TEST(MapFeatures, MatchesPrepareFrameForAWindowIndependentDetector) {
 }
 
 TEST(MapFeatures, RefusesBadArgumentsAndCountsWhatDoesNotFit) {
-  host::Rng rng(78);
+  app::Rng rng(78);
   const auto bytes = build(point_model(testing::random_points(rng, 30, 10)), "-2:2:5", "-2:2:5");
   const TableView t = testing::open_table(bytes);
   const std::vector<RoiPoint> detected = {{10, 10}, {11, 10}, {12, 11}, {30, 12}};

@@ -26,7 +26,7 @@ using Scratch = testing::TrackerTestScratch;
 GrayImage draw(const std::vector<host::Point>& pts, float x, float y) { return testing::draw_points(pts, x, y, 0.0f, 160); }
 
 TEST(TrackingSession, PlainSessionIsTrackStepFrameForFrame) {
-  host::Rng rng(8);
+  app::Rng rng(8);
   const auto pts = testing::random_points(rng, 60, 15);
   const auto bytes = build(point_model(pts), "-5:5:11", "-5:5:11");
   const TableView t = testing::open_table(bytes);
@@ -57,7 +57,7 @@ TEST(TrackingSession, PlainSessionIsTrackStepFrameForFrame) {
 }
 
 TEST(TrackingSession, BadOptionsAreRefused) {
-  host::Rng rng(1);
+  app::Rng rng(1);
   const auto bytes = build(point_model(testing::random_points(rng, 20, 8)), "-2:2:5", "-2:2:5");
   const TableView t = testing::open_table(bytes);
   TrackingSession session(t, nullptr, detector_of(t));
@@ -86,7 +86,7 @@ TEST(TrackingSession, BadOptionsAreRefused) {
 // every frame the plain loop is exact on.
 struct Motion {
   const char* name;
-  float (*x)(int frame, host::Rng& rng, float previous);
+  float (*x)(int frame, app::Rng& rng, float previous);
   bool half_hidden;
   double noise = 0.05;  // salt and pepper
 };
@@ -94,19 +94,19 @@ struct Motion {
 TEST(TrackingSession, TheDefaultSessionIsExactWhereThePlainLoopIs) {
   const Motion motions[] = {
       {"reverses after 12 frames at 3 px/frame",
-       +[](int f, host::Rng&, float) { return 60.0f + 3.0f * static_cast<float>(f < 12 ? f : 24 - f); }, false},
+       +[](int f, app::Rng&, float) { return 60.0f + 3.0f * static_cast<float>(f < 12 ? f : 24 - f); }, false},
       {"jumps by up to 4 px at random",
-       +[](int, host::Rng& rng, float previous) { return std::clamp(previous + static_cast<float>(rng.uniform_int(-4, 4)), 40.0f, 120.0f); },
+       +[](int, app::Rng& rng, float previous) { return std::clamp(previous + static_cast<float>(rng.uniform_int(-4, 4)), 40.0f, 120.0f); },
        false},
       {"half hidden from frame 8, moving 2 px/frame",
-       +[](int f, host::Rng&, float) { return 50.0f + 2.0f * static_cast<float>(f); }, true},
+       +[](int f, app::Rng&, float) { return 50.0f + 2.0f * static_cast<float>(f); }, true},
       // The reversal again in heavy noise, where clutter scores much of what the target does.
       {"reverses after 12 frames, 30% of the pixels flipped",
-       +[](int f, host::Rng&, float) { return 60.0f + 3.0f * static_cast<float>(f < 12 ? f : 24 - f); }, false, 0.30},
+       +[](int f, app::Rng&, float) { return 60.0f + 3.0f * static_cast<float>(f < 12 ? f : 24 - f); }, false, 0.30},
   };
   for (const Motion& m : motions) {
     SCOPED_TRACE(m.name);
-    host::Rng rng(21);
+    app::Rng rng(21);
     const auto pts = testing::random_points(rng, 120, 14);
     const auto bytes = build(point_model(pts), "-5:5:11", "-5:5:11");
     const TableView t = testing::open_table(bytes);
@@ -115,7 +115,7 @@ TEST(TrackingSession, TheDefaultSessionIsExactWhereThePlainLoopIs) {
     std::vector<GrayImage> frames;
     std::vector<float> truth;
     float x = 60.0f;
-    host::Rng motion_rng(3);
+    app::Rng motion_rng(3);
     for (int f = 0; f < 24; ++f) {
       x = m.x(f, motion_rng, x);
       GrayImage frame = testing::draw_points(pts, x, 80.0f, 0.0f, 180);

@@ -7,8 +7,8 @@
 #include <string>
 #include <vector>
 
-#include "gabarit/host/state_space.hpp"
-#include "gabarit/host/table_builder.hpp"
+#include "gabarit/host/tables/state_space.hpp"
+#include "gabarit/host/tables/table_builder.hpp"
 #include "test_tables.hpp"
 
 namespace gabarit {
@@ -17,7 +17,7 @@ namespace {
 using testing::build;
 using testing::point_model;
 
-std::vector<RoiPoint> random_features(host::Rng& rng, const TableView& t, double density) {
+std::vector<RoiPoint> random_features(app::Rng& rng, const TableView& t, double density) {
   std::vector<RoiPoint> f;
   for (std::uint16_t r = 0; r < t.roi_height(); ++r)
     for (std::uint16_t c = 0; c < t.roi_width(); ++c)
@@ -26,7 +26,7 @@ std::vector<RoiPoint> random_features(host::Rng& rng, const TableView& t, double
 }
 
 TEST(Voter, CountsEachFeatureOncePerCellItsPixelLists) {
-  host::Rng rng(5);
+  app::Rng rng(5);
   const auto bytes = build(point_model(testing::random_points(rng, 30, 12)), "-3:3:7", "-3:3:7");
   const TableView t = testing::open_table(bytes);
   const auto features = random_features(rng, t, 0.2);
@@ -47,7 +47,7 @@ TEST(Voter, CountsEachFeatureOncePerCellItsPixelLists) {
 // length (the voter takes the first two references of a list without a
 // branch) votes exactly what the lists say, on awkward sizes.
 TEST(Voter, EveryOffsetEncodingVotesWhatItsListsSay) {
-  host::Rng rng(17);
+  app::Rng rng(17);
   std::set<int> encodings;
   for (int round = 0; round < 12; ++round) {
     host::BuildOptions o;
@@ -117,7 +117,7 @@ TEST(Voter, RanksByVotesRelativeToStencilSize) {
 }
 
 TEST(Voter, TopKIsTheSortedOrderOfAllCells) {
-  host::Rng rng(9);
+  app::Rng rng(9);
   const auto bytes = build(point_model(testing::random_points(rng, 40, 12)), "-5:5:11", "-5:5:11", "0:0:1", 0.3, 4);
   const TableView t = testing::open_table(bytes);
   for (int round = 0; round < 20; ++round) {

@@ -13,8 +13,8 @@
 
 #include "gabarit/byte_order.hpp"
 #include "gabarit/crc32.hpp"
-#include "gabarit/host/test_vector_scene.hpp"
-#include "gabarit/host/tracking_run.hpp"
+#include "gabarit/host/scenes/test_vector_scene.hpp"
+#include "gabarit/host/runs/tracking_run.hpp"
 
 namespace gabarit {
 namespace {

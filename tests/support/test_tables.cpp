@@ -6,11 +6,11 @@
 
 #include "gabarit/byte_order.hpp"
 #include "gabarit/deterministic_math.hpp"
-#include "gabarit/host/state_space.hpp"
+#include "gabarit/host/tables/state_space.hpp"
 
 namespace gabarit::testing {
 
-std::vector<host::Point> random_points(host::Rng& rng, std::size_t n, std::int32_t half, double min_distance) {
+std::vector<host::Point> random_points(app::Rng& rng, std::size_t n, std::int32_t half, double min_distance) {
   std::vector<host::Point> out;
   for (int tries = 0; out.size() < n && tries < 200000; ++tries) {
     const host::Point p{rng.uniform_int(-half, half), rng.uniform_int(-half, half)};
@@ -72,13 +72,13 @@ app::GrayImage draw_points(const std::vector<host::Point>& pts, float x, float y
 PointScene::PointScene(std::uint64_t seed, std::size_t n, std::int32_t half, const std::string& xy, const std::string& theta,
                        std::uint32_t frame_side, double flip_probability)
     : side(frame_side), flip(flip_probability) {
-  host::Rng rng(seed);
+  app::Rng rng(seed);
   points = random_points(rng, n, half, 2.0);
   bytes = build(point_model(points), xy, xy, theta);
   table = open_table(bytes);
 }
 
-app::GrayImage PointScene::frame(float x, float y, float theta_deg, bool visible, host::Rng& noise) const {
+app::GrayImage PointScene::frame(float x, float y, float theta_deg, bool visible, app::Rng& noise) const {
   app::GrayImage g = visible ? draw_points(points, x, y, theta_deg, side) : app::GrayImage(side, side);
   for (auto& v : g.pixels)
     if (noise.bernoulli(flip)) v = static_cast<std::uint8_t>(255 - v);

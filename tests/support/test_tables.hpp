@@ -8,9 +8,9 @@
 #include <vector>
 
 #include "gabarit/app/image_io.hpp"
-#include "gabarit/host/model.hpp"
-#include "gabarit/host/rng.hpp"
-#include "gabarit/host/table_builder.hpp"
+#include "gabarit/host/tables/model.hpp"
+#include "gabarit/app/rng.hpp"
+#include "gabarit/host/tables/table_builder.hpp"
 #include "gabarit/table_view.hpp"
 #include "gabarit/tracker.hpp"
 
@@ -18,7 +18,7 @@ namespace gabarit::testing {
 
 // n distinct points in [-half, half]^2 whose pairwise Euclidean distance is
 // > min_distance (best effort: gives up on a point after many tries).
-std::vector<host::Point> random_points(host::Rng& rng, std::size_t n, std::int32_t half, double min_distance = 0);
+std::vector<host::Point> random_points(app::Rng& rng, std::size_t n, std::int32_t half, double min_distance = 0);
 
 host::ModelStack point_model(std::vector<host::Point> points);
 
@@ -52,7 +52,7 @@ struct PointScene {
   PointScene(const PointScene&) = delete;
   PointScene& operator=(const PointScene&) = delete;
   // The model at (x, y, theta_deg), or an empty frame when not visible.
-  app::GrayImage frame(float x, float y, float theta_deg, bool visible, host::Rng& noise) const;
+  app::GrayImage frame(float x, float y, float theta_deg, bool visible, app::Rng& noise) const;
 
   std::vector<host::Point> points;
   std::vector<std::byte> bytes;

@@ -1,4 +1,4 @@
-#include "gabarit/host/decimation.hpp"
+#include "gabarit/host/tables/decimation.hpp"
 
 #include <gtest/gtest.h>
 

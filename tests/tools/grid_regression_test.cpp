@@ -12,7 +12,7 @@
 
 #include "experiments.hpp"
 #include "gabarit/app/error.hpp"
-#include "gabarit/host/thesis_shapes.hpp"
+#include "gabarit/host/scenes/thesis_shapes.hpp"
 
 namespace gabarit::bench {
 namespace {

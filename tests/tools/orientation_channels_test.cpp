@@ -13,10 +13,10 @@
 #include "gabarit/app/error.hpp"
 #include "gabarit/app/image_io.hpp"
 #include "gabarit/dense_voter.hpp"
-#include "gabarit/host/model.hpp"
-#include "gabarit/host/rng.hpp"
-#include "gabarit/host/state_space.hpp"
-#include "gabarit/host/table_builder.hpp"
+#include "gabarit/host/tables/model.hpp"
+#include "gabarit/app/rng.hpp"
+#include "gabarit/host/tables/state_space.hpp"
+#include "gabarit/host/tables/table_builder.hpp"
 #include "gabarit/tracker.hpp"
 #include "gabarit/voter.hpp"
 #include "test_tables.hpp"
@@ -27,7 +27,7 @@ namespace {
 // An asymmetric grey shape (a disc with a square notch and a bar), drawn
 // with 4x4 supersampling so its edges have graded, orientation-bearing
 // gradients, rotated by theta about (cx, cy).
-app::GrayImage draw_shape(std::uint32_t w, std::uint32_t h, double cx, double cy, double theta_deg, host::Rng* noise) {
+app::GrayImage draw_shape(std::uint32_t w, std::uint32_t h, double cx, double cy, double theta_deg, app::Rng* noise) {
   app::GrayImage g(w, h, 70);
   const double c = std::cos(theta_deg * M_PI / 180), s = std::sin(theta_deg * M_PI / 180);
   for (std::uint32_t y = 0; y < h; ++y)
@@ -106,7 +106,7 @@ TEST(OrientationChannels, TheBuilderRefusesWhatCannotCarryOrientation) {
 
 TEST(OrientationChannels, EveryVoterGivesTheSameCountersAndFewerVotes) {
   const Tables t;
-  host::Rng noise(3);
+  app::Rng noise(3);
   const app::GrayImage frame = draw_shape(160, 150, 81.3, 72.6, 17.2, &noise);
   for (const Pose previous : {Pose{80, 73, 17, 0}, Pose{82, 71, 0, 0}, Pose{79.6f, 74.2f, 15.5f, 0}}) {
     testing::TrackerTestScratch csr(t.channels);
@@ -147,7 +147,7 @@ TEST(OrientationChannels, EveryVoterGivesTheSameCountersAndFewerVotes) {
 
 TEST(OrientationChannels, TheTrackerFindsThePose) {
   const Tables t;
-  host::Rng noise(4);
+  app::Rng noise(4);
   const app::GrayImage frame = draw_shape(160, 150, 81, 73, 16.5, &noise);
   for (const TableView* table : {&t.plain, &t.channels}) {
     testing::TrackerTestScratch s(*table);

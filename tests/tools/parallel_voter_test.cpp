@@ -1,6 +1,6 @@
 // Multi-threaded voting: bit-identical to the reference voter for any number
 // of threads, on awkward table sizes, including saturating counters.
-#include "gabarit/host/parallel_voter.hpp"
+#include "gabarit/host/runs/parallel_voter.hpp"
 
 #include <gtest/gtest.h>
 
@@ -12,7 +12,7 @@ namespace gabarit {
 namespace {
 
 TEST(ParallelVoter, CountersAreBitIdenticalToTheReferenceVoter) {
-  host::Rng rng(17);
+  app::Rng rng(17);
   for (const char* axis : {"0:0:1", "-1:1:3", "-3:3:7", "-6:6:13"}) {
     const auto bytes = testing::build(testing::point_model(testing::random_points(rng, 45, 10)), axis, "-2:2:5");
     const TableView t = testing::open_table(bytes);
@@ -44,7 +44,7 @@ TEST(ParallelVoter, CountersAreBitIdenticalToTheReferenceVoter) {
 }
 
 TEST(ParallelVoter, AFeatureOutsideTheRoiIsRefused) {
-  host::Rng rng(2);
+  app::Rng rng(2);
   const auto bytes = testing::build(testing::point_model(testing::random_points(rng, 20, 6)), "-2:2:5", "-2:2:5");
   const TableView t = testing::open_table(bytes);
   for (const auto split : {host::ParallelVoter::Split::kCells, host::ParallelVoter::Split::kFeatures}) {

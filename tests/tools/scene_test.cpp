@@ -9,9 +9,9 @@
 #include <iterator>
 #include <string>
 
-#include "gabarit/host/evaluation.hpp"
+#include "gabarit/app/evaluation.hpp"
 #include "gabarit/app/image_io.hpp"
-#include "gabarit/host/scene_synth.hpp"
+#include "gabarit/host/scenes/scene_synth.hpp"
 
 namespace gabarit::host {
 namespace {
@@ -35,7 +35,7 @@ TEST(Scene, IsDeterministicWithTruthOcclusionAndADistinctFocusStack) {
     EXPECT_EQ(slurp(dir / "a" / f), slurp(dir / "b" / f)) << f;
   EXPECT_EQ(a.visible_frames, 25u);
 
-  const auto truth = read_pose_csv((dir / "a" / "gt.csv").string());
+  const auto truth = app::read_pose_csv((dir / "a" / "gt.csv").string());
   ASSERT_EQ(truth.size(), 30u);
   double max_step = 0, max_turn = 0;
   for (std::size_t i = 0; i < truth.size(); ++i) {
@@ -65,16 +65,16 @@ TEST(Scene, IsDeterministicWithTruthOcclusionAndADistinctFocusStack) {
 }
 
 TEST(Evaluation, AngleDepthAndReacquisitionAreMeasured) {
-  std::vector<PoseSample> truth, poses;
+  std::vector<app::PoseSample> truth, poses;
   for (std::uint32_t f = 0; f < 12; ++f) {
     const bool hidden = f >= 4 && f < 7;
     truth.push_back({f, 10.0 + f, 20.0, 1.0 * f, f % 2, !hidden});
-    PoseSample p{f, 10.0 + f, 20.0, 1.0 * f + (f == 2 ? 1.5 : 0.25), f % 2, true};
+    app::PoseSample p{f, 10.0 + f, 20.0, 1.0 * f + (f == 2 ? 1.5 : 0.25), f % 2, true};
     if (f == 7 || f == 8) p.x += 5;  // two frames after the occlusion before it is found again
     if (f == 3) p.depth = 5;
     poses.push_back(p);
   }
-  const Accuracy a = evaluate(poses, truth);
+  const app::Accuracy a = app::evaluate(poses, truth);
   EXPECT_EQ(a.frames, 9u);
   EXPECT_EQ(a.within_1deg, 8u);
   EXPECT_NEAR(a.max_error_deg, 1.5, 1e-9);
@@ -84,7 +84,7 @@ TEST(Evaluation, AngleDepthAndReacquisitionAreMeasured) {
   poses[9].x += 5;
   poses[10].x += 5;
   poses[11].x += 5;
-  const Accuracy never = evaluate(poses, truth);
+  const app::Accuracy never = app::evaluate(poses, truth);
   ASSERT_EQ(never.reacquired_after.size(), 1u);
   EXPECT_EQ(never.reacquired_after[0], -1);
 }
@@ -120,7 +120,7 @@ TEST(PipetteScenes, AreTransparentChangeTheirLookAndSplitIntoHalves) {
   o.max_turn_deg = 0;
   o.frames = 68;
   write_scene_sequence(o, dir.string());
-  const auto truth = read_pose_csv((dir / "gt.csv").string());
+  const auto truth = app::read_pose_csv((dir / "gt.csv").string());
   auto frames = app::open_frames((dir / "frames.y4m").string());
   app::GrayImage f0, f, f67;
   ASSERT_TRUE(frames->next(f0));
@@ -181,13 +181,13 @@ TEST(SceneSuite, MixesObjectsMotionsAndHalvesAndEveryObjectRenders) {
       }
     EXPECT_GT(object_pixels, 400u) << name;
     EXPECT_EQ(border_changed, 0u) << name << ": the outline must stay inside the model image";
-    const auto truth = read_pose_csv((dir / name / "gt.csv").string());
+    const auto truth = app::read_pose_csv((dir / name / "gt.csv").string());
     ASSERT_EQ(truth.size(), 30u);
     EXPECT_TRUE(truth[5].visible) << name << ": the occluder only starts sliding in";
     EXPECT_FALSE(truth[14].visible) << name << ": covered";
     EXPECT_TRUE(truth[29].visible) << name << ": the occluder has left";
     EXPECT_LT(summary.visible_frames, 30u);
-    for (const PoseSample& p : truth) {
+    for (const app::PoseSample& p : truth) {
       EXPECT_GT(p.x, summary.object_radius) << name;
       EXPECT_LT(p.x, summary.width - summary.object_radius) << name;
     }

@@ -1,10 +1,10 @@
-#include "gabarit/host/stencil.hpp"
+#include "gabarit/host/tables/stencil.hpp"
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
 
-#include "gabarit/host/rng.hpp"
+#include "gabarit/app/rng.hpp"
 
 #include <cmath>
 #include <set>
@@ -62,7 +62,7 @@ TEST(Stencil, SweptArcsCoverTheWholeArc) {
 // bounding box) against the definition: every arc pixel plus every integer
 // translation of the cell, sorted and de-duplicated.
 TEST(Stencil, TranslationSweepEqualsTheDefinition) {
-  host::Rng rng(5);
+  app::Rng rng(5);
   for (int trial = 0; trial < 50; ++trial) {
     std::vector<Point> arcs;
     for (int i = 0; i < 40; ++i) arcs.push_back({rng.uniform_int(-20, 20), rng.uniform_int(-20, 20)});
@@ -85,7 +85,7 @@ TEST(Stencil, TranslationSweepEqualsTheDefinition) {
 }
 
 TEST(Stencil, TableVotesEqualBruteForceIntersectionCounts) {
-  host::Rng rng(4242);
+  app::Rng rng(4242);
   for (int round = 0; round < 40; ++round) {
     const auto pts = testing::random_points(rng, 1 + rng.next_u32() % 40, 1 + static_cast<std::int32_t>(rng.next_u32() % 15));
     const double lo = -static_cast<double>(rng.next_u32() % 8) - 0.5 * (rng.next_u32() % 2);
@@ -136,7 +136,7 @@ TEST(Stencil, TableVotesEqualBruteForceIntersectionCounts) {
 // than the minimum distance between model points, the cell holding the true
 // motion is the unique argmax (noise-free frame).
 TEST(Stencil, TheoremOneTrueCellIsTheUniqueArgmax) {
-  host::Rng rng(99);
+  app::Rng rng(99);
   struct Space {
     const char* axis;
     double span;  // largest distance between two translations of a cell

@@ -1,4 +1,4 @@
-#include "gabarit/host/synth.hpp"
+#include "gabarit/host/scenes/synth.hpp"
 
 #include <gtest/gtest.h>
 

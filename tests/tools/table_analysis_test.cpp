@@ -1,16 +1,16 @@
-#include "gabarit/host/table_analysis.hpp"
+#include "gabarit/host/tables/table_analysis.hpp"
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
 
 #include "gabarit/app/error.hpp"
-#include "gabarit/host/rng.hpp"
-#include "gabarit/host/state_space.hpp"
-#include "gabarit/host/table_budget.hpp"
-#include "gabarit/host/table_builder.hpp"
-#include "gabarit/host/template_reduction.hpp"
-#include "gabarit/host/thesis_shapes.hpp"
+#include "gabarit/app/rng.hpp"
+#include "gabarit/host/tables/state_space.hpp"
+#include "gabarit/host/tables/table_budget.hpp"
+#include "gabarit/host/tables/table_builder.hpp"
+#include "gabarit/host/tables/template_reduction.hpp"
+#include "gabarit/host/scenes/thesis_shapes.hpp"
 #include "gabarit/voter.hpp"
 #include "test_tables.hpp"
 

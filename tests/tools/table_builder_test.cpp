@@ -1,4 +1,4 @@
-#include "gabarit/host/table_builder.hpp"
+#include "gabarit/host/tables/table_builder.hpp"
 
 #include <gtest/gtest.h>
 
@@ -6,7 +6,7 @@
 
 #include "gabarit/app/error.hpp"
 #include "gabarit/app/image_io.hpp"
-#include "gabarit/host/synth.hpp"
+#include "gabarit/host/scenes/synth.hpp"
 #include "gabarit/table_format.hpp"
 #include "test_tables.hpp"
 
@@ -17,7 +17,7 @@ using testing::build;
 using testing::point_model;
 
 TEST(TableBuilder, SameInputsAndSeedGiveIdenticalBytes) {
-  host::Rng rng(1);
+  app::Rng rng(1);
   const auto model = point_model(testing::random_points(rng, 150, 25));
   for (double keep : {1.0, 0.5, 0.1}) {
     EXPECT_EQ(build(model, "-5:5:11", "-5:5:11", "-2:2:3", keep, 42), build(model, "-5:5:11", "-5:5:11", "-2:2:3", keep, 42));
@@ -29,7 +29,7 @@ TEST(TableBuilder, SameInputsAndSeedGiveIdenticalBytes) {
 }
 
 TEST(TableBuilder, DecimationShrinksStencilsAndTheTable) {
-  host::Rng rng(2);
+  app::Rng rng(2);
   const auto model = point_model(testing::random_points(rng, 194, 30));
   const auto full = build(model, "-5:5:11", "-5:5:11");
   const auto tenth = build(model, "-5:5:11", "-5:5:11", "0:0:1", 0.1, 7);

@@ -6,15 +6,15 @@
 
 #include <filesystem>
 
-#include "gabarit/host/evaluation.hpp"
-#include "gabarit/host/synth.hpp"
-#include "gabarit/host/tracking_run.hpp"
+#include "gabarit/app/evaluation.hpp"
+#include "gabarit/host/scenes/synth.hpp"
+#include "gabarit/host/runs/tracking_run.hpp"
 #include "test_tables.hpp"
 
 namespace gabarit {
 namespace {
 
-host::Accuracy track_synthetic(double noise, double keep, std::uint64_t seed, std::uint32_t frames) {
+app::Accuracy track_synthetic(double noise, double keep, std::uint64_t seed, std::uint32_t frames) {
   const auto dir = std::filesystem::temp_directory_path() / ("gabarit_track_" + std::to_string(seed) + "_" + std::to_string(noise));
   host::SynthOptions o;
   o.shape = host::random_closed_curve(200, seed);
@@ -26,12 +26,12 @@ host::Accuracy track_synthetic(double noise, double keep, std::uint64_t seed, st
   const auto bytes = testing::build(testing::point_model(o.shape), "-5:5:11", "-5:5:11", "0:0:1", keep, seed);
   const TableView table = testing::open_table(bytes);
   auto frames_in = app::open_frames((dir / "frames.y4m").string());
-  std::vector<host::PoseSample> poses, gt;
+  std::vector<app::PoseSample> poses, gt;
   host::run_tracking(table, *frames_in, Pose{static_cast<float>(truth[0].x), static_cast<float>(truth[0].y), 0, 0}, std::nullopt,
                      [&](const app::TrackRow& r) { poses.push_back({r.frame, r.step.pose.x, r.step.pose.y, 0, 0, true}); });
   for (const auto& t : truth) gt.push_back({t.frame, double(t.x), double(t.y), 0, 0, true});
   std::filesystem::remove_all(dir);
-  return host::evaluate(poses, gt);
+  return app::evaluate(poses, gt);
 }
 
 TEST(Tracking, ExactInEveryFrameWithoutNoise) {

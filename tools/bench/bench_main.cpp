@@ -30,8 +30,8 @@
 #include "pipette.hpp"
 #include "suite.hpp"
 #include "gabarit/app/error.hpp"
-#include "gabarit/host/thesis_shapes.hpp"
-#include "gabarit/host/svg_plot.hpp"
+#include "gabarit/host/scenes/thesis_shapes.hpp"
+#include "gabarit/app/svg_plot.hpp"
 
 #ifndef GABARIT_BUILD_TYPE
 #define GABARIT_BUILD_TYPE "unknown"
@@ -227,10 +227,10 @@ int run(const Options& o) {
   std::ostringstream hist_csv, robust_csv;
   hist_csv << "shape,keep,refs_per_pixel,pixels\n";
   robust_csv << "shape,keep,references,mean_margin,min_margin\n";
-  std::map<std::string, std::vector<host::svg::Series>> hist_series, robust_series;
+  std::map<std::string, std::vector<app::svg::Series>> hist_series, robust_series;
   std::map<std::string, std::vector<std::string>> robust_rows;
   for (const Shape& s : shapes) {
-    host::svg::Series mean{"mean", {}, {}}, min{"minimum", {}, {}};
+    app::svg::Series mean{"mean", {}, {}}, min{"minimum", {}, {}};
     for (double keep : keeps) {
       const auto bytes = shape_table(s, keep, 1);
       TableView t;
@@ -243,7 +243,7 @@ int run(const Options& o) {
       min.x.push_back(keep), min.y.push_back(static_cast<double>(r.min));
       if (keep == 1 || keep == 0.5 || keep == 0.1 || keep == 0.01) {
         const auto h = refs_per_pixel(t);
-        host::svg::Series series{"keep " + pct(keep), {}, {}};
+        app::svg::Series series{"keep " + pct(keep), {}, {}};
         for (std::size_t k = 0; k < h.size(); ++k) {
           hist_csv << s.name << ',' << keep << ',' << k << ',' << h[k] << '\n';
           series.x.push_back(static_cast<double>(k)), series.y.push_back(static_cast<double>(h[k]));
@@ -308,7 +308,7 @@ int run(const Options& o) {
         md << ", " << r.method.substr(r.method.find(", ") + 2) << ": " << fmt(cv_ccoeff / r.micros, 1) << "×";
       }
     md << ".\n\n![timing " << s.name << "](timing_" << s.name << ".svg)\n\n";
-    host::svg::write(o.out + "/timing_" + s.name + ".svg", host::svg::bars("Time per frame, " + s.name + " (" + std::to_string(s.points.size()) + " points), 20% noise",
+    app::svg::write(o.out + "/timing_" + s.name + ".svg", app::svg::bars("Time per frame, " + s.name + " (" + std::to_string(s.points.size()) + " points), 20% noise",
                                                              "microseconds per frame", labels, values));
   }
 
@@ -344,16 +344,16 @@ int run(const Options& o) {
       md << " keep " << pct(k) << ": " << (limit < 0 ? "none" : pct(limit)) << ";";
     }
     md << "\n\n![grid " << s.name << "](grid_" << s.name << ".svg)\n\n";
-    host::svg::write(o.out + "/grid_" + s.name + ".svg",
-               host::svg::heatmap("Wrong frames out of " + std::to_string(grid_frames) + ", " + s.name, "fraction of references kept", xl,
+    app::svg::write(o.out + "/grid_" + s.name + ".svg",
+               app::svg::heatmap("Wrong frames out of " + std::to_string(grid_frames) + ", " + s.name, "fraction of references kept", xl,
                             "salt-and-pepper noise", yl, values, static_cast<double>(grid_frames)));
   }
 
   md << "## Fig. 6.20: references per ROI pixel\n\n";
   for (const Shape& s : shapes) {
     md << "![refs per pixel " << s.name << "](refs_per_pixel_" << s.name << ".svg)\n\n";
-    host::svg::write(o.out + "/refs_per_pixel_" + s.name + ".svg",
-               host::svg::lines("ROI pixels by number of cells they list, " + s.name, "references (cells) per pixel", "pixels", hist_series[s.name], false, true));
+    app::svg::write(o.out + "/refs_per_pixel_" + s.name + ".svg",
+               app::svg::lines("ROI pixels by number of cells they list, " + s.name, "references (cells) per pixel", "pixels", hist_series[s.name], false, true));
   }
   md << "Data: `refs_per_pixel.csv`.\n\n## Figs. 6.26/6.27: robustness indicators\n\n"
         "For each stencil, its size minus its overlap with its most overlapping stencil; mean and minimum over the 121 stencils.\n\n";
@@ -361,8 +361,8 @@ int run(const Options& o) {
     md << "### " << s.name << "\n\n| keep | references | table bytes | mean margin | min margin |\n|---:|---:|---:|---:|---:|\n";
     for (const auto& row : robust_rows[s.name]) md << row << "\n";
     md << "\n![robustness " << s.name << "](robustness_" << s.name << ".svg)\n\n";
-    host::svg::write(o.out + "/robustness_" + s.name + ".svg",
-               host::svg::lines("Stencil robustness indicators, " + s.name, "fraction of references kept", "pixels", robust_series[s.name], true, false));
+    app::svg::write(o.out + "/robustness_" + s.name + ".svg",
+               app::svg::lines("Stencil robustness indicators, " + s.name, "fraction of references kept", "pixels", robust_series[s.name], true, false));
   }
   const double seconds = std::chrono::duration<double>(Clock::now() - started).count();
   md << "---\nWhole bench: " << fmt(seconds) << " s. Files: timing.csv, grid.csv, refs_per_pixel.csv, robustness.csv, *.svg.\n";

@@ -15,14 +15,14 @@
 #include "gabarit/app/scratch.hpp"
 #include "gabarit/dense_voter.hpp"
 #include "gabarit/app/error.hpp"
-#include "gabarit/host/decimation.hpp"
-#include "gabarit/host/state_space.hpp"
-#include "gabarit/host/synth.hpp"
-#include "gabarit/host/table_budget.hpp"
-#include "gabarit/host/table_builder.hpp"
-#include "gabarit/host/template_reduction.hpp"
-#include "gabarit/host/thesis_shapes.hpp"
-#include "gabarit/host/svg_plot.hpp"
+#include "gabarit/host/tables/decimation.hpp"
+#include "gabarit/host/tables/state_space.hpp"
+#include "gabarit/host/scenes/synth.hpp"
+#include "gabarit/host/tables/table_budget.hpp"
+#include "gabarit/host/tables/table_builder.hpp"
+#include "gabarit/host/tables/template_reduction.hpp"
+#include "gabarit/host/scenes/thesis_shapes.hpp"
+#include "gabarit/app/svg_plot.hpp"
 
 namespace gabarit::bench {
 namespace {
@@ -461,11 +461,11 @@ int run_decimation_study(const DecimationStudyOptions& o) {
     }
     double max_time = 0;
     for (const auto& row : time) max_time = std::max(max_time, *std::max_element(row.begin(), row.end()));
-    host::svg::write(o.out + "/decimation_wrong_" + s.shape.name + ".svg",
-               host::svg::heatmap(s.shape.name + ": wrong frames of " + std::to_string(s.sequence_frames) + " (default policy)", "references kept",
+    app::svg::write(o.out + "/decimation_wrong_" + s.shape.name + ".svg",
+               app::svg::heatmap(s.shape.name + ": wrong frames of " + std::to_string(s.sequence_frames) + " (default policy)", "references kept",
                             xl, "noise", yl, wrong, static_cast<double>(s.sequence_frames)));
-    host::svg::write(o.out + "/decimation_time_" + s.shape.name + ".svg",
-               host::svg::heatmap(s.shape.name + ": us per frame (default policy)", "references kept", xl, "noise", yl, time, max_time));
+    app::svg::write(o.out + "/decimation_time_" + s.shape.name + ".svg",
+               app::svg::heatmap(s.shape.name + ": us per frame (default policy)", "references kept", xl, "noise", yl, time, max_time));
     md << "\n![wrong frames](decimation_wrong_" << s.shape.name << ".svg) ![time](decimation_time_" << s.shape.name << ".svg)\n";
   }
   // Voting time per keep ratio, one run, single thread (the thesis's decimation gain).

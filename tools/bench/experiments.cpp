@@ -1,6 +1,6 @@
 #include "experiments.hpp"
 
-#include "gabarit/host/table_analysis.hpp"
+#include "gabarit/host/tables/table_analysis.hpp"
 
 #include <algorithm>
 #include <atomic>
@@ -10,10 +10,10 @@
 
 #include "gabarit/deterministic_math.hpp"
 #include "gabarit/app/error.hpp"
-#include "gabarit/host/rng.hpp"
-#include "gabarit/host/state_space.hpp"
-#include "gabarit/host/table_builder.hpp"
-#include "gabarit/host/tracking_run.hpp"
+#include "gabarit/app/rng.hpp"
+#include "gabarit/host/tables/state_space.hpp"
+#include "gabarit/host/tables/table_builder.hpp"
+#include "gabarit/host/runs/tracking_run.hpp"
 #include "gabarit/voter.hpp"
 
 namespace gabarit::bench {

@@ -18,11 +18,11 @@
 #include <vector>
 
 #include "gabarit/app/image_io.hpp"
-#include "gabarit/host/model.hpp"
-#include "gabarit/host/synth.hpp"
-#include "gabarit/host/table_analysis.hpp"
-#include "gabarit/host/tracking_run.hpp"
-#include "gabarit/host/voter_trials.hpp"
+#include "gabarit/host/tables/model.hpp"
+#include "gabarit/host/scenes/synth.hpp"
+#include "gabarit/host/tables/table_analysis.hpp"
+#include "gabarit/host/runs/tracking_run.hpp"
+#include "gabarit/host/runs/voter_trials.hpp"
 #include "gabarit/table_view.hpp"
 #include "gabarit/tracker.hpp"
 
@@ -31,7 +31,7 @@ namespace gabarit::bench {
 using app::GrayImage;
 using host::Point;
 
-// The trials and tables of the protocol above (gabarit/host/voter_trials.hpp).
+// The trials and tables of the protocol above (gabarit/host/runs/voter_trials.hpp).
 using host::kCellAxis;
 using host::kMaxStep;
 using host::make_shape;

@@ -18,19 +18,19 @@
 
 #include "gabarit/features.hpp"
 #include "gabarit/app/error.hpp"
-#include "gabarit/host/evaluation.hpp"
+#include "gabarit/app/evaluation.hpp"
 #include "gabarit/app/image_io.hpp"
-#include "gabarit/host/model.hpp"
-#include "gabarit/host/parallel_voter.hpp"
-#include "gabarit/host/rng.hpp"
-#include "gabarit/host/scene_synth.hpp"
-#include "gabarit/host/stencil.hpp"
-#include "gabarit/host/synth.hpp"
-#include "gabarit/host/table_builder.hpp"
-#include "gabarit/host/tracking_run.hpp"
+#include "gabarit/host/tables/model.hpp"
+#include "gabarit/host/runs/parallel_voter.hpp"
+#include "gabarit/app/rng.hpp"
+#include "gabarit/host/scenes/scene_synth.hpp"
+#include "gabarit/host/tables/stencil.hpp"
+#include "gabarit/host/scenes/synth.hpp"
+#include "gabarit/host/tables/table_builder.hpp"
+#include "gabarit/host/runs/tracking_run.hpp"
 #include "gabarit/tracking_session.hpp"
 #include "scene_io.hpp"
-#include "gabarit/host/svg_plot.hpp"
+#include "gabarit/app/svg_plot.hpp"
 
 namespace gabarit::bench {
 namespace {
@@ -46,7 +46,7 @@ std::string fmt(double v, int digits = 1) {
 
 struct Run {
   std::string name;
-  std::vector<host::PoseSample> poses;
+  std::vector<app::PoseSample> poses;
   double mean_us = 0;
   std::vector<double> micros;
   bool position_only = false;  // OpenCV's box trackers: angle and depth are not estimated
@@ -61,7 +61,7 @@ struct Run {
 struct Scene {
   host::SceneOptions options;
   std::vector<app::GrayImage> frames;
-  std::vector<host::PoseSample> truth;
+  std::vector<app::PoseSample> truth;
   std::vector<app::GrayImage> model_images;
   host::BuildOptions build;        // the fine table's state space
   std::vector<std::byte> table_bytes;
@@ -82,7 +82,7 @@ Scene make_scene(const std::string& dir, bool quick, std::ostringstream& md) {
   const std::string seq = (fs::path(dir) / "scene").string();
   const host::SceneSummary scene = host::write_scene_sequence(so, seq);
   frames = read_all_frames(fs::path(seq) / "frames.y4m");
-  sc.truth = host::read_pose_csv((fs::path(seq) / "gt.csv").string());
+  sc.truth = app::read_pose_csv((fs::path(seq) / "gt.csv").string());
   md << "Scene: " << frames.size() << " frames " << so.width << "x" << so.height << " (" << scene.visible_frames
      << " visible; occlusion " << so.occlusion_start << ".." << so.occlusion_start + so.occlusion_frames - 1
      << "), camera.png cog over gravel.png, " << so.depths << " focus-stack depths, illumination +-" << so.illumination * 100
@@ -238,13 +238,13 @@ void accuracy_table(const Scene& sc, const std::string& dir, std::ostringstream&
     }
   }
 #endif
-  md << "## Accuracy and time per frame\n\n";
+  md << "## app::Accuracy and time per frame\n\n";
   md << "Visible frames only. Targets: position within 1 px in >= 98%, angle within 1 deg in >= 98%, depth exact in >= 95%, "
         "reacquired within 10 frames after the occlusion, time <= 1/30 of the NCC bank.\n\n";
   md << "| method | within 1 px | 2 px | 6 px | 12 px | 20 px | 40 px | angle within 1 deg | depth exact | reacquired after | us/frame mean | median | NCC time / this, mean | median |\n";
   md << "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
   for (const Run& r : runs) {
-    const host::Accuracy a = host::evaluate(r.poses, truth);
+    const app::Accuracy a = app::evaluate(r.poses, truth);
     const auto share = [&](double limit) {
       std::size_t n = 0;
       for (const auto& t : truth) {
@@ -271,23 +271,23 @@ void accuracy_table(const Scene& sc, const std::string& dir, std::ostringstream&
         "features once and voting every second one at each placement, unless said) and votes the best three again; "
         "the median is a tracking frame.\n\nPose files: poses-N.csv in table order. Trajectories: trajectory-x.svg, trajectory-theta.svg.\n\n";
   for (const char* axis : {"x", "theta"}) {
-    std::vector<host::svg::Series> series;
-    host::svg::Series t{"truth", {}, {}};
+    std::vector<app::svg::Series> series;
+    app::svg::Series t{"truth", {}, {}};
     for (const auto& p : truth) {
       t.x.push_back(p.frame);
       t.y.push_back(axis[0] == 'x' ? p.x : p.theta_deg);
     }
     series.push_back(t);
     for (std::size_t i : {std::size_t{0}, focus_stack_run, ncc_run}) {
-      host::svg::Series s{runs[i].name, {}, {}};
+      app::svg::Series s{runs[i].name, {}, {}};
       for (const auto& p : runs[i].poses) {
         s.x.push_back(p.frame);
         s.y.push_back(axis[0] == 'x' ? p.x : p.theta_deg);
       }
       series.push_back(s);
     }
-    host::svg::write((fs::path(dir) / (std::string("trajectory-") + axis + ".svg")).string(),
-               host::svg::lines(std::string("Tracked and true ") + axis + " (thesis Figs. 6.55-6.59)", "frame",
+    app::svg::write((fs::path(dir) / (std::string("trajectory-") + axis + ".svg")).string(),
+               app::svg::lines(std::string("Tracked and true ") + axis + " (thesis Figs. 6.55-6.59)", "frame",
                           axis[0] == 'x' ? "x (px)" : "theta (deg)", series, false, false));
   }
 
@@ -312,7 +312,7 @@ void other_scenes_table(const Scene& sc, const std::string& dir, std::ostringstr
     const std::string other_dir = (fs::path(dir) / ("scene-seed" + std::to_string(seed))).string();
     host::write_scene_sequence(other, other_dir);
     const std::vector<app::GrayImage> other_frames = read_all_frames(fs::path(other_dir) / "frames.y4m");
-    const auto other_truth = host::read_pose_csv((fs::path(other_dir) / "gt.csv").string());
+    const auto other_truth = app::read_pose_csv((fs::path(other_dir) / "gt.csv").string());
     const std::vector<std::string> paths = scene_model_paths(other_dir, other.depths);
     host::TrackingOptions options;
     for (const std::string& path : paths) options.extras.focus_stack.push_back(app::read_pgm(path));
@@ -334,7 +334,7 @@ void other_scenes_table(const Scene& sc, const std::string& dir, std::ostringstr
         r.mean_us += row.micros / static_cast<double>(other_frames.size());
         lost += row.step.state == TrackState::kLost;
       });
-      const host::Accuracy a = host::evaluate(r.poses, other_truth);
+      const app::Accuracy a = app::evaluate(r.poses, other_truth);
       std::string reacq;
       for (int v : a.reacquired_after) reacq += (reacq.empty() ? "" : ", ") + (v < 0 ? std::string("never") : std::to_string(v) + " frames");
       const auto pct = [&](std::size_t n) { return fmt(100.0 * static_cast<double>(n) / static_cast<double>(a.frames)) + "%"; };
@@ -455,7 +455,7 @@ void translation_policy_table(const std::string& dir, bool quick, std::ostringst
   host::fit_image_to_shape(syn);
   const std::string bin_dir = (fs::path(dir) / "curve").string();
   const auto gt = host::write_synthetic_sequence(syn, bin_dir);
-  std::vector<host::PoseSample> bin_truth;
+  std::vector<app::PoseSample> bin_truth;
   for (const auto& row : gt) bin_truth.push_back({row.frame, static_cast<double>(row.x), static_cast<double>(row.y), 0, 0, true});
   host::ModelStack curve;
   curve.depths.push_back(syn.shape);
@@ -471,10 +471,10 @@ void translation_policy_table(const std::string& dir, bool quick, std::ostringst
     TableView t;
     if (TableView::open(bytes, t) != Status::kOk) throw app::Error("microscope: curve table invalid");
     auto src = app::open_frames((fs::path(bin_dir) / "frames.y4m").string());
-    std::vector<host::PoseSample> poses;
+    std::vector<app::PoseSample> poses;
     host::run_tracking(t, *src, Pose{static_cast<float>(gt[0].x), static_cast<float>(gt[0].y), 0, 0}, std::nullopt,
                        [&](const app::TrackRow& row) { poses.push_back({row.frame, row.step.pose.x, row.step.pose.y, 0, 0, true}); });
-    const host::Accuracy a = host::evaluate(poses, bin_truth);
+    const app::Accuracy a = app::evaluate(poses, bin_truth);
     md << "| " << (policy == host::TranslationPolicy::kEnclosing ? "smallest enclosing integer range" : "inside, else closest (default)")
        << " | " << t.reference_count() << " | " << fmt(100.0 * static_cast<double>(a.within_1px) / static_cast<double>(a.frames))
        << "% | " << fmt(a.mean_error_px, 2) << " |\n";
@@ -532,7 +532,7 @@ void complexity_table(bool quick, std::ostringstream& md) {
       syn.noise = 0.05;
       syn.seed = 4;
       host::fit_image_to_shape(syn);
-      host::Rng rng(syn.seed);
+      app::Rng rng(syn.seed);
       std::vector<app::GrayImage> seq;
       std::int32_t x = static_cast<std::int32_t>(syn.width / 2), y = static_cast<std::int32_t>(syn.height / 2);
       const Pose start{static_cast<float>(x), static_cast<float>(y), 0, 0};

@@ -12,12 +12,12 @@
 
 #include "gabarit/app/error.hpp"
 #include "gabarit/app/scratch.hpp"
-#include "gabarit/host/evaluation.hpp"
-#include "gabarit/host/model.hpp"
+#include "gabarit/app/evaluation.hpp"
+#include "gabarit/host/tables/model.hpp"
 #include "gabarit/app/particle_run.hpp"
-#include "gabarit/host/scene_synth.hpp"
-#include "gabarit/host/table_builder.hpp"
-#include "gabarit/host/tracking_run.hpp"
+#include "gabarit/host/scenes/scene_synth.hpp"
+#include "gabarit/host/tables/table_builder.hpp"
+#include "gabarit/host/runs/tracking_run.hpp"
 #include "scene_io.hpp"
 
 namespace gabarit::bench {
@@ -62,11 +62,11 @@ struct Tally {
   }
 };
 
-Tally score(const std::vector<host::PoseSample>& poses, const std::vector<host::PoseSample>& truth, std::vector<double> micros) {
+Tally score(const std::vector<app::PoseSample>& poses, const std::vector<app::PoseSample>& truth, std::vector<double> micros) {
   Tally t;
   for (std::size_t f = 0; f < truth.size() && f < poses.size(); ++f) {
     if (!truth[f].visible) continue;
-    const host::PoseSample &g = truth[f], &p = poses[f];
+    const app::PoseSample &g = truth[f], &p = poses[f];
     const double tg = g.theta_deg * kPi / 180, tp = p.theta_deg * kPi / 180;
     const double tip = std::hypot(p.x + kTipPx * std::cos(tp) - g.x - kTipPx * std::cos(tg),
                                   p.y + kTipPx * std::sin(tp) - g.y - kTipPx * std::sin(tg));
@@ -173,7 +173,7 @@ int run_pipette(const PipetteOptions& o) {
     const fs::path seq = dir / sub;
     host::write_scene_sequence(so, seq.string());
     const std::vector<app::GrayImage> images = read_all_frames(seq / "frames.y4m");
-    const auto truth = host::read_pose_csv((seq / "gt.csv").string());
+    const auto truth = app::read_pose_csv((seq / "gt.csv").string());
     const std::vector<std::string> paths = scene_model_paths(seq, so.depths);
     const Pose init{static_cast<float>(truth[0].x), static_cast<float>(truth[0].y), static_cast<float>(truth[0].theta_deg), 0};
     std::vector<std::byte> tables[2];  // custom edges, Canny
@@ -190,7 +190,7 @@ int run_pipette(const PipetteOptions& o) {
     if (k == 0) {
       TableView canny;
       if (TableView::open(tables[1], canny) != Status::kOk) throw app::Error("pipette: a table did not validate");
-      const host::PoseSample& t = truth[0];
+      const app::PoseSample& t = truth[0];
       costs = measure_costs(canny, images[0],
                             {static_cast<float>(t.x), static_cast<float>(t.y), static_cast<float>(t.theta_deg), 0}, o.particles);
     }
@@ -199,7 +199,7 @@ int run_pipette(const PipetteOptions& o) {
       const Method& method = kMethods[m];
       TableView table;
       if (TableView::open(tables[method.canny], table) != Status::kOk) throw app::Error("pipette: a table did not validate");
-      std::vector<host::PoseSample> poses;
+      std::vector<app::PoseSample> poses;
       std::vector<double> micros;
       const auto on_row = [&](const app::TrackRow& row) {
         poses.push_back({row.frame, row.step.pose.x, row.step.pose.y, row.step.pose.theta_deg, row.step.pose.depth, true});

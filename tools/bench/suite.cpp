@@ -10,13 +10,13 @@
 #include <sstream>
 
 #include "gabarit/app/error.hpp"
-#include "gabarit/host/detection_run.hpp"
-#include "gabarit/host/evaluation.hpp"
-#include "gabarit/host/model.hpp"
+#include "gabarit/host/runs/detection_run.hpp"
+#include "gabarit/app/evaluation.hpp"
+#include "gabarit/host/tables/model.hpp"
 #include "gabarit/app/particle_run.hpp"
-#include "gabarit/host/scene_synth.hpp"
-#include "gabarit/host/table_builder.hpp"
-#include "gabarit/host/tracking_run.hpp"
+#include "gabarit/host/scenes/scene_synth.hpp"
+#include "gabarit/host/tables/table_builder.hpp"
+#include "gabarit/host/runs/tracking_run.hpp"
 #include "scene_io.hpp"
 
 namespace gabarit::bench {
@@ -68,14 +68,14 @@ constexpr const char* kParticle = "particle filter (edges, 1000 particles)";
 constexpr const char* kSessionParticles = "default session with particle re-acquisition";
 constexpr const char* kSessionDetection = "default session with re-acquisition by detection";
 
-bool detection_hit(const host::PoseSample& t, const Pose& p, bool depth_counts) {
+bool detection_hit(const app::PoseSample& t, const Pose& p, bool depth_counts) {
   const double dt = std::remainder(static_cast<double>(p.theta_deg) - t.theta_deg, 360.0);
   return std::hypot(p.x - t.x, p.y - t.y) <= 2.0 && std::abs(dt) <= 1.0 && (!depth_counts || p.depth == t.depth);
 }
 
 // Scores a detector's poses (best first, per frame) against the truth.
 template <class Detect>
-DetectionMeasure measure_detection(const std::vector<app::GrayImage>& frames, const std::vector<host::PoseSample>& truth,
+DetectionMeasure measure_detection(const std::vector<app::GrayImage>& frames, const std::vector<app::PoseSample>& truth,
                                    bool depth_counts, Detect&& detect) {
   DetectionMeasure m;
   m.ran = true;
@@ -104,18 +104,18 @@ DetectionMeasure measure_detection(const std::vector<app::GrayImage>& frames, co
 // centres, where the target was last seen and where it would be had it kept
 // its velocity then (taken here from the truth). Beyond is the detection
 // issue's.
-std::vector<bool> occlusions_in_reach(const std::vector<host::PoseSample>& truth, const TableView& table) {
+std::vector<bool> occlusions_in_reach(const std::vector<app::PoseSample>& truth, const TableView& table) {
   const RecoveryOptions recovery;
   const Axis ax = table.axis_x(), ay = table.axis_y(), at = table.axis_theta();
   const double reach_x = kSearchRings * search_step(ax) + ax.max, reach_y = kSearchRings * search_step(ay) + ay.max;
   const double reach_theta = kSearchTurns * recovery.turn_deg + at.max;
-  const auto within = [&](const host::PoseSample& t, double x, double y, double theta) {
+  const auto within = [&](const app::PoseSample& t, double x, double y, double theta) {
     return std::fabs(t.x - x) <= reach_x && std::fabs(t.y - y) <= reach_y && std::fabs(t.theta_deg - theta) <= reach_theta;
   };
   std::vector<bool> out;
-  const host::PoseSample *last_seen = nullptr, *before = nullptr;
+  const app::PoseSample *last_seen = nullptr, *before = nullptr;
   bool hidden = false;
-  for (const host::PoseSample& t : truth) {
+  for (const app::PoseSample& t : truth) {
     if (!t.visible) {
       hidden = true;
       continue;
@@ -139,9 +139,9 @@ std::vector<bool> occlusions_in_reach(const std::vector<host::PoseSample>& truth
   return out;
 }
 
-Measure measure(const std::vector<host::PoseSample>& poses, const std::vector<host::PoseSample>& truth, std::vector<double> micros,
+Measure measure(const std::vector<app::PoseSample>& poses, const std::vector<app::PoseSample>& truth, std::vector<double> micros,
                 bool depth_counts, const std::vector<bool>& in_reach) {
-  const host::Accuracy a = host::evaluate(poses, truth);
+  const app::Accuracy a = app::evaluate(poses, truth);
   Measure m;
   const double n = a.frames ? static_cast<double>(a.frames) : 1.0;
   m.within_1px = 100.0 * static_cast<double>(a.within_1px) / n;
@@ -169,7 +169,7 @@ SceneResult run_scene(std::uint32_t index, std::uint32_t frames_per_scene, const
   const std::filesystem::path seq = dir / sub;
   host::write_scene_sequence(so, seq.string());
   const std::vector<app::GrayImage> frames = read_all_frames(seq / "frames.y4m");
-  const auto truth = host::read_pose_csv((seq / "gt.csv").string());
+  const auto truth = app::read_pose_csv((seq / "gt.csv").string());
   const std::vector<std::string> paths = scene_model_paths(seq, so.depths);
   std::vector<app::GrayImage> models;
   for (const std::string& p : paths) models.push_back(app::read_pgm(p));
@@ -204,7 +204,7 @@ SceneResult run_scene(std::uint32_t index, std::uint32_t frames_per_scene, const
     if (detection_recovery) options.profile.recovery = app::RecoveryKind::kDetection;
     if (detection_recovery) options.profile.detect_after = detect_after;
     if (particle_recovery) options.profile.recovery = app::RecoveryKind::kParticles;
-    std::vector<host::PoseSample> poses;
+    std::vector<app::PoseSample> poses;
     std::vector<double> micros, lost_micros;
     MemoryFrames src(frames);
     host::run_tracking(table, src, init, options, [&](const app::TrackRow& row) {
@@ -214,7 +214,7 @@ SceneResult run_scene(std::uint32_t index, std::uint32_t frames_per_scene, const
     });
     out.methods.push_back(measure(poses, truth, micros, depth_counts, in_reach));
     Measure& m = out.methods.back();
-    const host::Accuracy a = host::evaluate(poses, truth);
+    const app::Accuracy a = app::evaluate(poses, truth);
     m.occlusions = static_cast<int>(a.reacquired_after.size());
     for (int r : a.reacquired_after) m.reacquired_within_10 += r >= 0 && r <= 10;
     m.search_frames = lost_micros.size();
@@ -226,7 +226,7 @@ SceneResult run_scene(std::uint32_t index, std::uint32_t frames_per_scene, const
   if (peer) {
     NccBank ncc(models, 5, 0.5, 3);
     Pose pose = init;
-    std::vector<host::PoseSample> poses;
+    std::vector<app::PoseSample> poses;
     std::vector<double> micros;
     for (std::uint32_t f = 0; f < frames.size(); ++f) {
       const auto t = Clock::now();
@@ -257,7 +257,7 @@ SceneResult run_scene(std::uint32_t index, std::uint32_t frames_per_scene, const
     }
   }
   if (particles) {  // gabarit track --tracker particle's defaults
-    std::vector<host::PoseSample> poses;
+    std::vector<app::PoseSample> poses;
     std::vector<double> micros;
     MemoryFrames src(frames);
     app::run_particle_tracking(table, src, init, app::ParticleRunOptions{}, [&](const app::TrackRow& row) {

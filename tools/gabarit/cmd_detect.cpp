@@ -9,7 +9,7 @@
 #include "gabarit/app/files.hpp"
 #include "gabarit/app/image_io.hpp"
 #include "gabarit/app/scratch.hpp"
-#include "gabarit/host/detection_run.hpp"
+#include "gabarit/host/runs/detection_run.hpp"
 
 namespace gabarit::cli {
 

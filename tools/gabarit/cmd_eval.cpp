@@ -3,7 +3,7 @@
 
 #include "gabarit/app/args.hpp"
 #include "commands.hpp"
-#include "gabarit/host/evaluation.hpp"
+#include "gabarit/app/evaluation.hpp"
 
 namespace gabarit::cli {
 
@@ -15,8 +15,8 @@ int eval(const std::vector<std::string>& argv) {
              {"--gt", "gt.csv", "ground truth from gabarit synth", false, true},
              {"--require-exact", "", "exit 1 unless every visible frame is on the exact pixel"}});
   if (!args.parse(argv)) return 0;
-  const auto a = host::evaluate(host::read_pose_csv(args.get("--poses")), host::read_pose_csv(args.get("--gt")));
-  std::cout << host::accuracy_json(a);
+  const auto a = app::evaluate(app::read_pose_csv(args.get("--poses")), app::read_pose_csv(args.get("--gt")));
+  std::cout << app::accuracy_json(a);
   if (args.has("--require-exact") && (a.exact != a.frames || a.missing != 0 || a.frames == 0)) return 1;
   return 0;
 }

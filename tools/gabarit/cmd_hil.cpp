@@ -54,13 +54,8 @@ void prepare_report_dir(const std::string& dir) {
   fs::remove(fs::path(dir) / "dut.log");  // the DUT's log is appended to across its restarts in a run
 }
 
-}  // namespace
-
-int hil(const std::vector<std::string>& argv) {
-  if (argv.empty() || (argv[0] != "run" && argv[0] != "--help" && argv[0] != "-h"))
-    throw app::UsageError("hil: want 'run' (gabarit hil run --help)");
-  const std::vector<std::string> rest(argv.begin() + (argv[0] == "run" ? 1 : 0), argv.end());
-  app::Args args(
+app::Args declare_hil_run() {
+  return app::Args(
       "hil run",
       "--dut inprocess|verilator|cortex-m|virtual-board|board:NAME --sequence DIR --report DIR [--table T] [--init X,Y[,THETA[,DEPTH]]] [--rate FPS]\n"
       "       [--faults FILE|random:P|cycle:N:KINDS] [--frames N] [--seed S] [--soak N]",
@@ -103,53 +98,11 @@ int hil(const std::vector<std::string>& argv) {
        {"--virtual-board", "DIR", "virtual-board: the aarch64 build (default: build/aarch64 beside this build), with\n"
                                   "                          gabarit-board, gabarit-hil-relay and virtual-board/cache (prepare.sh)"},
        {"--timeout", "MS", "declare the DUT hung after this long without an answer to a PING (default per DUT)"}});
-  if (!args.parse(rest)) return 0;
-  const std::string kind = args.get("--dut");
-  const std::string sequence = args.get("--sequence");
-  const std::string report = args.get("--report");
-  const std::string table = args.get_or("--table", (std::filesystem::path(sequence) / "table.gbt").string());
-  if (!std::filesystem::exists(table)) throw app::UsageError("no table: " + table + " does not exist (give --table)");
-  const std::string frames_path = (std::filesystem::path(sequence) / "frames.y4m").string();
-  if (!std::filesystem::exists(frames_path)) throw app::UsageError(sequence + ": no frames.y4m");
-  const auto dut_only = [&](const char* option, const char* dut) {
-    if (args.has(option) && kind != dut) throw app::UsageError(std::string(option) + " applies to --dut " + dut);
-  };
-  dut_only("--plain", "inprocess");
-  dut_only("--profile", "inprocess");
-  dut_only("--link", "inprocess");
-  dut_only("--slots", "inprocess");
-  dut_only("--firmware", "cortex-m");
-  dut_only("--machine", "cortex-m");
-  dut_only("--icount", "cortex-m");
-  dut_only("--verilator-dut", "verilator");
-  dut_only("--clock-mhz", "verilator");
-  dut_only("--virtual-board", "virtual-board");
+}
 
-  hil::RunConfig config;
-  config.sequence_dir = sequence;
-  config.table_path = table;
-  if (args.has("--init")) {
-    const app::TableFile t(table);
-    config.init = app::parse_init_pose(args.get("--init"), t.view(), "--init");
-  }
-  config.rate_fps = args.number("--rate", 0, 0.001, 100000);
-  config.seed = static_cast<std::uint64_t>(args.integer("--seed", 1, 0, INT64_MAX));
-  const SequenceShape shape = sequence_shape(frames_path);
-  const std::uint32_t available = shape.frames;
-  config.max_frames = static_cast<std::uint32_t>(args.integer("--frames", available, 1, 0xFFFFFFFEll));
-  if (config.max_frames > available) config.max_frames = available;
-  if (config.max_frames == 0) throw app::Error(frames_path + ": no frames");
-  config.loops = static_cast<std::uint32_t>(args.integer("--soak", 1, 1, 1000000));
-  config.soak_window = static_cast<std::uint32_t>(args.integer("--soak-window", 1000, 10, 100000000));
-  if (args.has("--soak-window") && !args.has("--soak")) throw app::UsageError("--soak-window needs --soak");
-  if (std::uint64_t{config.max_frames} * config.loops > 0xFFFFFFFEull) throw app::UsageError("--soak: too many frames in all");
-  const std::uint32_t total_frames = config.max_frames * config.loops;
-  if (args.has("--faults")) config.faults = hil::parse_fault_plan(args.get("--faults"), total_frames, config.seed);
-  for (const hil::PlannedFault& f : config.faults.faults)
-    if (hil::is_rig_fault(f.kind) && kind != "virtual-board" && kind.rfind("board:", 0) != 0)
-      throw app::UsageError(std::string("--faults: ") + hil::fault_name(f.kind) +
-                            " is a rig's fault: --dut virtual-board or board:NAME injects it");
-
+// The device under test `--dut KIND` names, with its options.
+std::unique_ptr<hil::DutDriver> make_dut(const app::Args& args, const std::string& kind, const std::string& table,
+                                         const std::string& report, const SequenceShape& shape, const std::string& frames_path) {
   std::unique_ptr<hil::DutDriver> dut;
   const std::chrono::milliseconds timeout(args.integer("--timeout", 0, 1, 3600000));
   if (kind == "inprocess") {
@@ -199,6 +152,95 @@ int hil(const std::vector<std::string>& argv) {
     throw app::UsageError("--dut '" + kind + "': want inprocess, verilator, cortex-m, virtual-board or board:NAME");
   }
   if (timeout.count() != 0 && kind != "verilator") dut->set_hang_timeout(timeout);
+  return dut;
+}
+
+// gt.csv's poses, if any, repeated for every loop of a soak.
+std::vector<app::PoseSample> read_truth(const std::string& sequence, const hil::RunConfig& config) {
+  std::vector<app::PoseSample> truth;
+  if (const auto gt = std::filesystem::path(sequence) / "gt.csv"; std::filesystem::exists(gt)) truth = app::read_pose_csv(gt.string());
+  if (config.loops > 1) {  // a soak's loop L shows frame k as frame L * length + k
+    const std::vector<app::PoseSample> once = truth;
+    for (std::uint32_t loop = 1; loop < config.loops; ++loop)
+      for (app::PoseSample t : once)
+        if (t.frame < config.max_frames) {
+          t.frame += loop * config.max_frames;
+          truth.push_back(t);
+        }
+  }
+  return truth;
+}
+
+// The failed checks (the first ten) and a summary line; the exit status.
+int summarise(const hil::RunResult& result, const std::string& report) {
+  std::size_t failed = 0;
+  for (const hil::Check& c : hil::run_checks(result)) {
+    if (c.passed) continue;
+    if (failed++ < 10) std::fprintf(stderr, "hil: FAIL %s: %s\n", c.name.c_str(), c.message.c_str());
+  }
+  std::size_t poses = 0;
+  for (const auto& r : result.frames) poses += r.pose.has_value();
+  std::fprintf(stderr, "hil: %s: %u frames, %zu poses, %zu faults injected, %zu checks failed; report in %s\n", result.caps.kind,
+               result.frames_total, poses, result.faults.size(), failed, report.c_str());
+  if (!result.error.empty()) std::fprintf(stderr, "hil: the run stopped: %s\n", result.error.c_str());
+  return failed == 0 ? 0 : 1;
+}
+
+}  // namespace
+
+int hil(const std::vector<std::string>& argv) {
+  if (argv.empty() || (argv[0] != "run" && argv[0] != "--help" && argv[0] != "-h"))
+    throw app::UsageError("hil: want 'run' (gabarit hil run --help)");
+  const std::vector<std::string> rest(argv.begin() + (argv[0] == "run" ? 1 : 0), argv.end());
+  app::Args args = declare_hil_run();
+  if (!args.parse(rest)) return 0;
+  const std::string kind = args.get("--dut");
+  const std::string sequence = args.get("--sequence");
+  const std::string report = args.get("--report");
+  const std::string table = args.get_or("--table", (std::filesystem::path(sequence) / "table.gbt").string());
+  if (!std::filesystem::exists(table)) throw app::UsageError("no table: " + table + " does not exist (give --table)");
+  const std::string frames_path = (std::filesystem::path(sequence) / "frames.y4m").string();
+  if (!std::filesystem::exists(frames_path)) throw app::UsageError(sequence + ": no frames.y4m");
+  const auto dut_only = [&](const char* option, const char* dut) {
+    if (args.has(option) && kind != dut) throw app::UsageError(std::string(option) + " applies to --dut " + dut);
+  };
+  dut_only("--plain", "inprocess");
+  dut_only("--profile", "inprocess");
+  dut_only("--link", "inprocess");
+  dut_only("--slots", "inprocess");
+  dut_only("--firmware", "cortex-m");
+  dut_only("--machine", "cortex-m");
+  dut_only("--icount", "cortex-m");
+  dut_only("--verilator-dut", "verilator");
+  dut_only("--clock-mhz", "verilator");
+  dut_only("--virtual-board", "virtual-board");
+
+  hil::RunConfig config;
+  config.sequence_dir = sequence;
+  config.table_path = table;
+  if (args.has("--init")) {
+    const app::TableFile t(table);
+    config.init = app::parse_init_pose(args.get("--init"), t.view(), "--init");
+  }
+  config.rate_fps = args.number("--rate", 0, 0.001, 100000);
+  config.seed = static_cast<std::uint64_t>(args.integer("--seed", 1, 0, INT64_MAX));
+  const SequenceShape shape = sequence_shape(frames_path);
+  const std::uint32_t available = shape.frames;
+  config.max_frames = static_cast<std::uint32_t>(args.integer("--frames", available, 1, 0xFFFFFFFEll));
+  if (config.max_frames > available) config.max_frames = available;
+  if (config.max_frames == 0) throw app::Error(frames_path + ": no frames");
+  config.loops = static_cast<std::uint32_t>(args.integer("--soak", 1, 1, 1000000));
+  config.soak_window = static_cast<std::uint32_t>(args.integer("--soak-window", 1000, 10, 100000000));
+  if (args.has("--soak-window") && !args.has("--soak")) throw app::UsageError("--soak-window needs --soak");
+  if (std::uint64_t{config.max_frames} * config.loops > 0xFFFFFFFEull) throw app::UsageError("--soak: too many frames in all");
+  const std::uint32_t total_frames = config.max_frames * config.loops;
+  if (args.has("--faults")) config.faults = hil::parse_fault_plan(args.get("--faults"), total_frames, config.seed);
+  for (const hil::PlannedFault& f : config.faults.faults)
+    if (hil::is_rig_fault(f.kind) && kind != "virtual-board" && kind.rfind("board:", 0) != 0)
+      throw app::UsageError(std::string("--faults: ") + hil::fault_name(f.kind) +
+                            " is a rig's fault: --dut virtual-board or board:NAME injects it");
+
+  std::unique_ptr<hil::DutDriver> dut = make_dut(args, kind, table, report, shape, frames_path);
 
   prepare_report_dir(report);
   app::OutputFile jsonl((std::filesystem::path(report) / "results.jsonl").string());
@@ -212,31 +254,11 @@ int hil(const std::vector<std::string>& argv) {
     std::fprintf(stderr, tty ? "\rhil: %u/%u frames answered" : "hil: %u/%u frames answered\n", done, total);
     if (tty && done == total) std::fputc('\n', stderr);
   };
-  std::vector<host::PoseSample> truth;
-  if (const auto gt = std::filesystem::path(sequence) / "gt.csv"; std::filesystem::exists(gt)) truth = host::read_pose_csv(gt.string());
-  if (config.loops > 1) {  // a soak's loop L shows frame k as frame L * length + k
-    const std::vector<host::PoseSample> once = truth;
-    for (std::uint32_t loop = 1; loop < config.loops; ++loop)
-      for (host::PoseSample t : once)
-        if (t.frame < config.max_frames) {
-          t.frame += loop * config.max_frames;
-          truth.push_back(t);
-        }
-  }
+  const std::vector<app::PoseSample> truth = read_truth(sequence, config);
   const hil::RunResult result = hil::run_hil(config, *dut);
   jsonl.commit();
   hil::write_report(report, config, result, truth);
-  std::size_t failed = 0;
-  for (const hil::Check& c : hil::run_checks(result)) {
-    if (c.passed) continue;
-    if (failed++ < 10) std::fprintf(stderr, "hil: FAIL %s: %s\n", c.name.c_str(), c.message.c_str());
-  }
-  std::size_t poses = 0;
-  for (const auto& r : result.frames) poses += r.pose.has_value();
-  std::fprintf(stderr, "hil: %s: %u frames, %zu poses, %zu faults injected, %zu checks failed; report in %s\n", result.caps.kind,
-               result.frames_total, poses, result.faults.size(), failed, report.c_str());
-  if (!result.error.empty()) std::fprintf(stderr, "hil: the run stopped: %s\n", result.error.c_str());
-  return failed == 0 ? 0 : 1;
+  return summarise(result, report);
 }
 
 }  // namespace gabarit::cli

@@ -5,9 +5,9 @@
 #include "gabarit/app/args.hpp"
 #include "gabarit/app/files.hpp"
 #include "commands.hpp"
-#include "gabarit/host/scene_synth.hpp"
-#include "gabarit/host/synth.hpp"
-#include "gabarit/host/thesis_shapes.hpp"
+#include "gabarit/host/scenes/scene_synth.hpp"
+#include "gabarit/host/scenes/synth.hpp"
+#include "gabarit/host/scenes/thesis_shapes.hpp"
 
 namespace gabarit::cli {
 namespace {

@@ -9,15 +9,15 @@
 
 #include "gabarit/app/args.hpp"
 #include "commands.hpp"
-#include "gabarit/host/hdl_export.hpp"
+#include "gabarit/app/hdl_export.hpp"
 #include "gabarit/app/files.hpp"
-#include "gabarit/host/model.hpp"
-#include "gabarit/host/svg_plot.hpp"
-#include "gabarit/host/table_analysis.hpp"
-#include "gabarit/host/table_budget.hpp"
-#include "gabarit/host/table_builder.hpp"
-#include "gabarit/host/template_reduction.hpp"
-#include "gabarit/host/table_inspect.hpp"
+#include "gabarit/host/tables/model.hpp"
+#include "gabarit/app/svg_plot.hpp"
+#include "gabarit/host/tables/table_analysis.hpp"
+#include "gabarit/host/tables/table_budget.hpp"
+#include "gabarit/host/tables/table_builder.hpp"
+#include "gabarit/host/tables/template_reduction.hpp"
+#include "gabarit/host/tables/table_inspect.hpp"
 #include "gabarit/features.hpp"
 #include "gabarit/table_view.hpp"
 
@@ -37,72 +37,63 @@ Axis axis_argument(const app::Args& args, const std::string& name, const std::st
 
 }  // namespace
 
-int tables_build(const std::vector<std::string>& argv) {
-  app::Args args("tables build", "(--model IMG.pgm [IMG.pgm ...] | --model-points PTS.csv) --x MIN:MAX:CELLS --y MIN:MAX:CELLS [options] -o OUT",
-            "Builds a stencil look-up table (docs/table-format.md) for a model over a bounded motion space.\n"
-            "Several --model images form a focus stack ordered by depth index. Same inputs and seed give\n"
-            "byte-identical output.",
-            {{"--model", "IMG.pgm", "model image (repeat for a focus stack, in depth order)", true},
-             {"--model-points", "PTS.csv", "integer x,y feature positions relative to the reference point"},
-             {"--ref", "X,Y", "reference point in model-image pixels (default: floor(w/2),floor(h/2))"},
-             {"--x", "MIN:MAX:CELLS", "x translations: CELLS cells with centres evenly from MIN to MAX", false, true},
-             {"--y", "MIN:MAX:CELLS", "y translations, as --x", false, true},
-             {"--theta", "MIN:MAX:CELLS", "rotation in degrees, as --x (default 0:0:1)"},
-             {"--keep", "RATIO", "fraction of stencil references kept by decimation, (0,1] (default 1)"},
-             {"--decimation", "stencil|global|uniform", "which references go (docs/experiments.md, \"Decimation\"): stencil by\n"
-              "                          stencil, the most overlapped pixels first (the thesis's Algorithm 2, default); in one\n"
-              "                          global pass by overlap; or each with the same probability"},
-             {"--weight", "identity|power:K|greedy|rival", "stencil decimation: removal probability against overlap n: n\n"
-              "                          (default), n^K (K = 2, 3), always the most overlapped pixel, or by how alike\n"
-              "                          the stencils sharing the pixel are"},
-             {"--most-overlapping", "", "stencil decimation: remove first the pixels shared with the most overlapping stencil"},
-             {"--spread", "", "stencil decimation: spread removals evenly (a neighbourhood map)"},
-             {"--min-area", "N", "stencil decimation: keep at least N references per stencil (default 0: keep x size, at least 1)"},
-             {"--max-bytes", "N", "build to a budget instead of --keep: the table keeping the most references that fits\n"
-              "                          in N bytes (a flash or BRAM budget); reports its margin of error"},
-             {"--max-references", "N", "with or instead of --max-bytes: at most N references (a hardware voter's reference\n"
-              "                          memory, hdl/)"},
-             {"--min-margin", "K", "build to a margin instead of --keep: the smallest table whose margin of error (gabarit\n"
-              "                          tables analyse) is at least K pixels; with --max-bytes, refused if it does not fit"},
-             {"--reduce-template", "K", "template reduction first (docs/experiments.md): keep the fewest model points whose\n"
-              "                          characterising value (every other translation puts >= K of them off the model) is\n"
-              "                          at least K; translation spaces only (no --theta)"},
-             {"--reduce-order", "greedy|random", "--reduce-template's search: least useful points first (default), or the best of\n"
-              "                          --reduce-restarts seeded random orders (default 16)"},
-             {"--reduce-restarts", "N", "random orders tried by --reduce-order random"},
-             {"--offsets", "compact|wide", "pixel offsets: compact (format 1.2, default, when smaller) or one u32 per pixel\n"
-              "                          (format 1.0/1.1, for readers older than 1.2)"},
-             {"--translations", "inside|enclosing", "integer translations of a cell with non-integer bounds: those inside\n"
-              "                          it, else the closest (default), or the smallest enclosing range (docs/tracking.md)"},
-             {"--seed", "N", "decimation seed (default 1)"},
-             {"--binary", "", "binary detector: a non-zero pixel is a feature (model images and frames)"},
-             {"--detector", "canny|gradient-rows", "edge detector for grey images (default canny: non-maximum suppression\n"
-              "                          and a double threshold, threshold/2..threshold; gradient-rows: the thesis's fast one,\n"
-              "                          which keeps one pixel per run along a row and so misses edges near horizontal)"},
-             {"--orientation-channels", "N", "split each ROI pixel into N channels of edge orientation, 2, 4, 8 or 16 (format\n"
-              "                          1.3): a feature votes only the cells whose stencil covers it with a model\n"
-              "                          point of its orientation (docs/table-format.md); needs --model images and a\n"
-              "                          gradient detector; 0 (default): position only"},
-             {"--no-model-images", "", "leave the model images out of the table (format 1.0; the tracker then has no\n"
-              "                          focus stack of its own: depth from the stencils, or gabarit track --focus-stack)"},
-             {"--threshold", "N", "gradient detector threshold 1..2040 (default: a quarter of the model's strongest edge)"},
-             {"-o", "OUT", "output table file", false, true}},
-            "IMG.pgm");
-  if (!args.parse(argv)) return 0;
-  // `--model a.pgm b.pgm c.pgm`: images after the first are positionals.
-  std::vector<std::string> images = args.all("--model");
-  if (!args.positionals().empty() && images.empty()) {
-    throw app::UsageError("unexpected argument '" + args.positionals()[0] + "' (model images follow --model)");
-  }
-  images.insert(images.end(), args.positionals().begin(), args.positionals().end());
-  const bool has_images = args.has("--model");
-  if (has_images == args.has("--model-points")) throw app::UsageError("give either --model or --model-points");
+namespace {
 
-  {
-    std::vector<std::string> inputs = images;
-    if (args.has("--model-points")) inputs.push_back(args.get("--model-points"));
-    app::refuse_same_file(args.get("-o"), "-o", inputs);
-  }
+app::Args declare_tables_build() {
+  return app::Args("tables build", "(--model IMG.pgm [IMG.pgm ...] | --model-points PTS.csv) --x MIN:MAX:CELLS --y MIN:MAX:CELLS [options] -o OUT",
+                   "Builds a stencil look-up table (docs/table-format.md) for a model over a bounded motion space.\n"
+                   "Several --model images form a focus stack ordered by depth index. Same inputs and seed give\n"
+                   "byte-identical output.",
+                   {{"--model", "IMG.pgm", "model image (repeat for a focus stack, in depth order)", true},
+                    {"--model-points", "PTS.csv", "integer x,y feature positions relative to the reference point"},
+                    {"--ref", "X,Y", "reference point in model-image pixels (default: floor(w/2),floor(h/2))"},
+                    {"--x", "MIN:MAX:CELLS", "x translations: CELLS cells with centres evenly from MIN to MAX", false, true},
+                    {"--y", "MIN:MAX:CELLS", "y translations, as --x", false, true},
+                    {"--theta", "MIN:MAX:CELLS", "rotation in degrees, as --x (default 0:0:1)"},
+                    {"--keep", "RATIO", "fraction of stencil references kept by decimation, (0,1] (default 1)"},
+                    {"--decimation", "stencil|global|uniform", "which references go (docs/experiments.md, \"Decimation\"): stencil by\n"
+                     "                          stencil, the most overlapped pixels first (the thesis's Algorithm 2, default); in one\n"
+                     "                          global pass by overlap; or each with the same probability"},
+                    {"--weight", "identity|power:K|greedy|rival", "stencil decimation: removal probability against overlap n: n\n"
+                     "                          (default), n^K (K = 2, 3), always the most overlapped pixel, or by how alike\n"
+                     "                          the stencils sharing the pixel are"},
+                    {"--most-overlapping", "", "stencil decimation: remove first the pixels shared with the most overlapping stencil"},
+                    {"--spread", "", "stencil decimation: spread removals evenly (a neighbourhood map)"},
+                    {"--min-area", "N", "stencil decimation: keep at least N references per stencil (default 0: keep x size, at least 1)"},
+                    {"--max-bytes", "N", "build to a budget instead of --keep: the table keeping the most references that fits\n"
+                     "                          in N bytes (a flash or BRAM budget); reports its margin of error"},
+                    {"--max-references", "N", "with or instead of --max-bytes: at most N references (a hardware voter's reference\n"
+                     "                          memory, hdl/)"},
+                    {"--min-margin", "K", "build to a margin instead of --keep: the smallest table whose margin of error (gabarit\n"
+                     "                          tables analyse) is at least K pixels; with --max-bytes, refused if it does not fit"},
+                    {"--reduce-template", "K", "template reduction first (docs/experiments.md): keep the fewest model points whose\n"
+                     "                          characterising value (every other translation puts >= K of them off the model) is\n"
+                     "                          at least K; translation spaces only (no --theta)"},
+                    {"--reduce-order", "greedy|random", "--reduce-template's search: least useful points first (default), or the best of\n"
+                     "                          --reduce-restarts seeded random orders (default 16)"},
+                    {"--reduce-restarts", "N", "random orders tried by --reduce-order random"},
+                    {"--offsets", "compact|wide", "pixel offsets: compact (format 1.2, default, when smaller) or one u32 per pixel\n"
+                     "                          (format 1.0/1.1, for readers older than 1.2)"},
+                    {"--translations", "inside|enclosing", "integer translations of a cell with non-integer bounds: those inside\n"
+                     "                          it, else the closest (default), or the smallest enclosing range (docs/tracking.md)"},
+                    {"--seed", "N", "decimation seed (default 1)"},
+                    {"--binary", "", "binary detector: a non-zero pixel is a feature (model images and frames)"},
+                    {"--detector", "canny|gradient-rows", "edge detector for grey images (default canny: non-maximum suppression\n"
+                     "                          and a double threshold, threshold/2..threshold; gradient-rows: the thesis's fast one,\n"
+                     "                          which keeps one pixel per run along a row and so misses edges near horizontal)"},
+                    {"--orientation-channels", "N", "split each ROI pixel into N channels of edge orientation, 2, 4, 8 or 16 (format\n"
+                     "                          1.3): a feature votes only the cells whose stencil covers it with a model\n"
+                     "                          point of its orientation (docs/table-format.md); needs --model images and a\n"
+                     "                          gradient detector; 0 (default): position only"},
+                    {"--no-model-images", "", "leave the model images out of the table (format 1.0; the tracker then has no\n"
+                     "                          focus stack of its own: depth from the stencils, or gabarit track --focus-stack)"},
+                    {"--threshold", "N", "gradient detector threshold 1..2040 (default: a quarter of the model's strongest edge)"},
+                    {"-o", "OUT", "output table file", false, true}},
+                   "IMG.pgm");
+}
+
+// The model: images (a focus stack) or a points CSV with the detector frames need.
+host::ModelStack read_model(const app::Args& args, const std::vector<std::string>& images, bool has_images) {
   host::ModelStack model;
   if (has_images) {
     host::ImageModelOptions mo;
@@ -138,6 +129,10 @@ int tables_build(const std::vector<std::string>& argv) {
     }
   }
 
+  return model;
+}
+
+host::BuildOptions read_build_options(const app::Args& args, bool has_images) {
   host::BuildOptions bo;
   bo.store_model_images = !args.has("--no-model-images");
   bo.orientation_channels = static_cast<std::uint32_t>(args.integer("--orientation-channels", 0, 0, 16));
@@ -172,6 +167,11 @@ int tables_build(const std::vector<std::string>& argv) {
   } else if (offsets != "compact") {
     throw app::UsageError("--offsets '" + offsets + "': want compact or wide");
   }
+  return bo;
+}
+
+// --reduce-template: the fewest model points that keep every translation apart by K.
+void reduce_template_if_asked(const app::Args& args, const host::BuildOptions& bo, host::ModelStack& model) {
   if (args.has("--reduce-template")) {
     if (bo.space.theta.cells != 1 || bo.space.theta.min != 0.0f)
       throw app::UsageError("--reduce-template works on translation spaces (leave --theta out)");
@@ -199,6 +199,10 @@ int tables_build(const std::vector<std::string>& argv) {
   } else if (args.has("--reduce-order") || args.has("--reduce-restarts")) {
     throw app::UsageError("--reduce-order and --reduce-restarts go with --reduce-template");
   }
+}
+
+// The table: to a budget (--max-bytes, --max-references, --min-margin) or with --keep.
+std::vector<std::byte> build_tables(const app::Args& args, const host::ModelStack& model, const host::BuildOptions& bo) {
   host::Budget budget;
   if (args.has("--max-bytes")) budget.max_bytes = static_cast<std::uint64_t>(args.integer("--max-bytes", 0, 1, table_format::kMaxTableBytes));
   if (args.has("--max-references"))
@@ -225,6 +229,31 @@ int tables_build(const std::vector<std::string>& argv) {
   } else {
     bytes = host::build_table(model, bo);
   }
+  return bytes;
+}
+
+}  // namespace
+
+int tables_build(const std::vector<std::string>& argv) {
+  app::Args args = declare_tables_build();
+  if (!args.parse(argv)) return 0;
+  // `--model a.pgm b.pgm c.pgm`: images after the first are positionals.
+  std::vector<std::string> images = args.all("--model");
+  if (!args.positionals().empty() && images.empty()) {
+    throw app::UsageError("unexpected argument '" + args.positionals()[0] + "' (model images follow --model)");
+  }
+  images.insert(images.end(), args.positionals().begin(), args.positionals().end());
+  const bool has_images = args.has("--model");
+  if (has_images == args.has("--model-points")) throw app::UsageError("give either --model or --model-points");
+  {
+    std::vector<std::string> inputs = images;
+    if (args.has("--model-points")) inputs.push_back(args.get("--model-points"));
+    app::refuse_same_file(args.get("-o"), "-o", inputs);
+  }
+  host::ModelStack model = read_model(args, images, has_images);
+  const host::BuildOptions bo = read_build_options(args, has_images);
+  reduce_template_if_asked(args, bo, model);
+  const std::vector<std::byte> bytes = build_tables(args, model, bo);
   TableView view;
   if (const Status s = TableView::open(bytes, view); s != Status::kOk) {
     throw app::Error(std::string("internal error: built table does not validate: ") + status_name(s));
@@ -275,8 +304,8 @@ int tables_analyse(const std::vector<std::string>& argv) {
   if (args.has("--plots")) {
     const std::string dir = args.get("--plots");
     std::filesystem::create_directories(dir);
-    host::svg::write(dir + "/overlap_map.svg", host::overlap_map_svg(view, analysis.weakest_cell));
-    host::svg::write(dir + "/margins.svg", host::margins_svg(analysis));
+    app::svg::write(dir + "/overlap_map.svg", host::overlap_map_svg(view, analysis.weakest_cell));
+    app::svg::write(dir + "/margins.svg", host::margins_svg(analysis));
   }
   if (args.has("-o")) app::write_file(args.get("-o"), json);
   else std::cout << json;
@@ -321,12 +350,12 @@ int tables_export_hdl(const std::vector<std::string>& argv) {
   const std::string& path = args.positionals()[0];
   const app::TableFile file(path);
   const TableView& view = file.view();
-  host::HdlCapacities cap;
+  app::HdlCapacities cap;
   cap.cells = static_cast<std::uint32_t>(args.integer("--cells", 0, 1, table_format::kMaxCells));
   cap.pixels = static_cast<std::uint32_t>(args.integer("--pixels", 0, 1, table_format::kMaxRoiPixels));
   cap.refs_per_lane = static_cast<std::uint32_t>(args.integer("--refs-per-lane", 0, 1, table_format::kMaxReferences));
   cap.range_count = static_cast<std::uint32_t>(args.integer("--range-count", 0, 1, table_format::kMaxCells));
-  std::fprintf(stderr, "%s\n", host::write_hdl_export(host::hdl_layout(view, lanes), args.get("--out"), cap).c_str());
+  std::fprintf(stderr, "%s\n", app::write_hdl_export(app::hdl_layout(view, lanes), args.get("--out"), cap).c_str());
   return 0;
 }
 

@@ -14,8 +14,8 @@
 #include "gabarit/app/particle_run.hpp"
 #include "gabarit/app/scratch.hpp"
 #include "gabarit/app/session_profile_io.hpp"
-#include "gabarit/host/detection_run.hpp"
-#include "gabarit/host/tracking_run.hpp"
+#include "gabarit/host/runs/detection_run.hpp"
+#include "gabarit/host/runs/tracking_run.hpp"
 
 namespace gabarit::cli {
 

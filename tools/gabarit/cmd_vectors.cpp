@@ -3,7 +3,7 @@
 
 #include "gabarit/app/args.hpp"
 #include "commands.hpp"
-#include "gabarit/host/test_vector_scene.hpp"
+#include "gabarit/host/scenes/test_vector_scene.hpp"
 
 namespace gabarit::cli {
 

@@ -20,7 +20,7 @@
 #include <vector>
 
 #include "gabarit/hil/harness.hpp"
-#include "gabarit/host/evaluation.hpp"
+#include "gabarit/app/evaluation.hpp"
 
 namespace gabarit::hil {
 
@@ -41,6 +41,6 @@ std::string frame_json(const FrameRecord& record);
 // Writes every file but results.jsonl (the caller streams that one).
 // `truth` may be empty (no gt.csv).
 void write_report(const std::string& dir, const RunConfig& config, const RunResult& result,
-                  const std::vector<host::PoseSample>& truth);
+                  const std::vector<app::PoseSample>& truth);
 
 }  // namespace gabarit::hil
