@@ -267,28 +267,16 @@ Status ModelFinder::verify(const ImageView& image, const Pose& pose, FinderScrat
   return Status::kOk;
 }
 
-Status ModelFinder::find(const ImageView& image, const FinderOptions& options, FinderScratch scratch,
-                         std::span<Detection> out, std::uint32_t& count) noexcept {
-  count = 0;
-  if (!valid(options) || !image.valid() || image.width > 65535u * kMaxPyramidFactor ||
-      image.height > 65535u * kMaxPyramidFactor)
-    return Status::kInvalidArgument;
-  if (options.coarse_depth >= static_cast<std::int32_t>(table_.depth_count())) return Status::kInvalidArgument;
-  if (out.size() < options.max_count) return Status::kBufferTooSmall;
-  const FinderGeometry g = finder_geometry(table_, detector_, options, image.width, image.height);
-  const FinderScratchSizes need = finder_scratch_sizes(g, table_);
-  // Coarse windows are addressed in 16 bits, accumulator cells in 31.
-  if (g.coarse_width > 65535u || g.coarse_height > 65535u || need.accumulator > 0x7FFFFFFFu) return Status::kInvalidArgument;
-  if (scratch.coarse_image.size() < need.coarse_pixels || scratch.coarse_features.size() < need.coarse_pixels ||
-      scratch.feature_index.size() < need.coarse_pixels || scratch.accumulator.size() < need.accumulator ||
-      scratch.model.size() < need.model_points || scratch.rotated.size() < 2 * need.model_points ||
-      scratch.candidates.size() < options.candidates)
-    return Status::kBufferTooSmall;
-  const bool binary = detector_.kind == table_format::DetectorKind::kBinary;
-  const std::uint32_t f = g.factor, cw = g.coarse_width, ch = g.coarse_height;
+namespace {
 
-  // 1. The coarse frame: block means (binary: block maxima, so a thin
-  // outline survives), then its features and their channels.
+// Step 1 of ModelFinder::find: the coarse frame (block means; binary: block
+// maxima, so a thin outline survives), its features, and their indices in
+// the padded accumulator sorted by orientation channel (channel_begin[c] is
+// channel c's first).
+Status coarse_features(const ImageView& image, const FinderGeometry& g, const Detector& detector, const FinderScratchSizes& need,
+                       FinderScratch& scratch, std::uint32_t (&channel_begin)[kChannels + 1]) noexcept {
+  const bool binary = detector.kind == table_format::DetectorKind::kBinary;
+  const std::uint32_t f = g.factor, cw = g.coarse_width, ch = g.coarse_height;
   for (std::uint32_t cy = 0; cy < ch; ++cy)
     for (std::uint32_t cx = 0; cx < cw; ++cx) {
       const std::uint32_t x0 = cx * f, y0 = cy * f;
@@ -307,10 +295,9 @@ Status ModelFinder::find(const ImageView& image, const FinderOptions& options, F
     }
   const ImageView coarse{scratch.coarse_image.data(), cw, ch, cw};
   FeatureCount fc;
-  GABARIT_TRY(extract_features(coarse, {0, 0, static_cast<std::uint16_t>(cw), static_cast<std::uint16_t>(ch)}, detector_.kind,
-                               detector_.threshold, scratch.coarse_features.first(need.coarse_pixels), fc));
+  GABARIT_TRY(extract_features(coarse, {0, 0, static_cast<std::uint16_t>(cw), static_cast<std::uint16_t>(ch)}, detector.kind,
+                               detector.threshold, scratch.coarse_features.first(need.coarse_pixels), fc));
   const std::size_t astride = std::size_t{cw} + 2 * g.pad;
-  std::uint32_t channel_begin[kChannels + 1] = {};
   auto channel_of = [&](const RoiPoint& p) -> std::uint32_t {
     if (!g.orientation) return 0;
     const SobelGradient s = sobel_gradient(coarse, p.col, p.row);
@@ -328,14 +315,15 @@ Status ModelFinder::find(const ImageView& image, const FinderOptions& options, F
     }
   }
 
-  // 2. The coarse model, and the vote of every rotation.
-  const std::uint32_t model_n = load_model(g.coarse_depth, f, g.orientation, scratch.model);
-  if (model_n == 0) return Status::kOk;
-  Shortlist shortlist;
-  shortlist.peaks = scratch.candidates.data();
-  shortlist.capacity = options.candidates;
-  const float min_distance_coarse = g.min_distance_px / static_cast<float>(f);
-  shortlist.distance2 = static_cast<std::int64_t>(min_distance_coarse * min_distance_coarse) + 1;
+  return Status::kOk;
+}
+
+// Step 2: every rotation of the coarse model voted by the coarse features of
+// its channels into one accumulator, whose 3 x 3 peaks go to the shortlist.
+void vote_rotations(const FinderOptions& options, const FinderGeometry& g, const FinderScratchSizes& need, std::uint32_t model_n,
+                    const std::uint32_t (&channel_begin)[kChannels + 1], FinderScratch& scratch, Shortlist& shortlist) noexcept {
+  const std::uint32_t cw = g.coarse_width, ch = g.coarse_height;
+  const std::size_t astride = std::size_t{cw} + 2 * g.pad;
   const std::size_t acc_cells = need.accumulator;
   const std::uint32_t channels = g.orientation ? kChannels : 1u;
   for (std::uint32_t k = 0; k < g.rotations; ++k) {
@@ -404,6 +392,69 @@ Status ModelFinder::find(const ImageView& image, const FinderOptions& options, F
     }
   }
 
+}
+
+// Step 4: the candidates ranked (a stable insertion sort), then duplicates
+// dropped (two peaks the table moved to one place) into `out`.
+void rank_detections(const FinderOptions& options, const FinderGeometry& g, FinderScratch& scratch, std::uint32_t shortlist_size,
+                     std::span<Detection> out, std::uint32_t& count) noexcept {
+  const std::uint32_t size = shortlist_size;
+  for (std::uint32_t i = 1; i < size; ++i) {
+    const FinderCandidate c = scratch.candidates[i];
+    std::uint32_t at = i;
+    while (at > 0 && ranks_above(c, scratch.candidates[at - 1])) {
+      scratch.candidates[at] = scratch.candidates[at - 1];
+      --at;
+    }
+    scratch.candidates[at] = c;
+  }
+  const float d2 = g.min_distance_px * g.min_distance_px;
+  for (std::uint32_t i = 0; i < size && scratch.candidates[i].found && count < options.max_count; ++i) {
+    const Detection& d = scratch.candidates[i].result;
+    bool duplicate = false;
+    for (std::uint32_t j = 0; j < count && !duplicate; ++j) {
+      const float dx = d.pose.x - out[j].pose.x, dy = d.pose.y - out[j].pose.y;
+      duplicate = dx * dx + dy * dy < d2;
+    }
+    if (!duplicate) out[count++] = d;
+  }
+}
+
+}  // namespace
+
+Status ModelFinder::find(const ImageView& image, const FinderOptions& options, FinderScratch scratch,
+                         std::span<Detection> out, std::uint32_t& count) noexcept {
+  count = 0;
+  if (!valid(options) || !image.valid() || image.width > 65535u * kMaxPyramidFactor ||
+      image.height > 65535u * kMaxPyramidFactor)
+    return Status::kInvalidArgument;
+  if (options.coarse_depth >= static_cast<std::int32_t>(table_.depth_count())) return Status::kInvalidArgument;
+  if (out.size() < options.max_count) return Status::kBufferTooSmall;
+  const FinderGeometry g = finder_geometry(table_, detector_, options, image.width, image.height);
+  const FinderScratchSizes need = finder_scratch_sizes(g, table_);
+  // Coarse windows are addressed in 16 bits, accumulator cells in 31.
+  if (g.coarse_width > 65535u || g.coarse_height > 65535u || need.accumulator > 0x7FFFFFFFu) return Status::kInvalidArgument;
+  if (scratch.coarse_image.size() < need.coarse_pixels || scratch.coarse_features.size() < need.coarse_pixels ||
+      scratch.feature_index.size() < need.coarse_pixels || scratch.accumulator.size() < need.accumulator ||
+      scratch.model.size() < need.model_points || scratch.rotated.size() < 2 * need.model_points ||
+      scratch.candidates.size() < options.candidates)
+    return Status::kBufferTooSmall;
+  const std::uint32_t f = g.factor;
+
+  // 1. The coarse frame, its features and their channels.
+  std::uint32_t channel_begin[kChannels + 1] = {};
+  GABARIT_TRY(coarse_features(image, g, detector_, need, scratch, channel_begin));
+
+  // 2. The coarse model, and the vote of every rotation.
+  const std::uint32_t model_n = load_model(g.coarse_depth, f, g.orientation, scratch.model);
+  if (model_n == 0) return Status::kOk;
+  Shortlist shortlist;
+  shortlist.peaks = scratch.candidates.data();
+  shortlist.capacity = options.candidates;
+  const float min_distance_coarse = g.min_distance_px / static_cast<float>(f);
+  shortlist.distance2 = static_cast<std::int64_t>(min_distance_coarse * min_distance_coarse) + 1;
+  vote_rotations(options, g, need, model_n, channel_begin, scratch, shortlist);
+
   // 3. The fine level. Each peak is voted with the table once and the
   // result verified; those within kConvergeShare of the best verified score
   // are voted again from each result until it stays in place (at most
@@ -466,27 +517,7 @@ Status ModelFinder::find(const ImageView& image, const FinderOptions& options, F
     GABARIT_TRY(verify(image, d.pose, scratch, d.score));
     c.found = d.score >= options.min_score;
   }
-  // Ranked (a stable insertion sort), then duplicates dropped: two peaks the
-  // table moved to one place.
-  for (std::uint32_t i = 1; i < shortlist.size; ++i) {
-    const FinderCandidate c = scratch.candidates[i];
-    std::uint32_t at = i;
-    while (at > 0 && ranks_above(c, scratch.candidates[at - 1])) {
-      scratch.candidates[at] = scratch.candidates[at - 1];
-      --at;
-    }
-    scratch.candidates[at] = c;
-  }
-  const float d2 = g.min_distance_px * g.min_distance_px;
-  for (std::uint32_t i = 0; i < shortlist.size && scratch.candidates[i].found && count < options.max_count; ++i) {
-    const Detection& d = scratch.candidates[i].result;
-    bool duplicate = false;
-    for (std::uint32_t j = 0; j < count && !duplicate; ++j) {
-      const float dx = d.pose.x - out[j].pose.x, dy = d.pose.y - out[j].pose.y;
-      duplicate = dx * dx + dy * dy < d2;
-    }
-    if (!duplicate) out[count++] = d;
-  }
+  rank_detections(options, g, scratch, shortlist.size, out, count);
   return Status::kOk;
 }
 

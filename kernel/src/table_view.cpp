@@ -142,7 +142,20 @@ std::uint32_t table_checksum(std::span<const std::byte> table) noexcept {
   return crc32_update(head, table.subspan(off::kCrc32 + 4));
 }
 
-Status TableView::open(std::span<const std::byte> bytes, TableView& out) noexcept {
+namespace {
+
+// What TableView::open reads from the header once the checksum holds; each
+// field checked by check_header before anything uses it.
+struct HeaderFields {
+  std::uint32_t file_bytes = 0, flags = 0, cell_count = 0, reference_count = 0, model_point_count = 0, delta_count = 0;
+  std::uint32_t channels = 1, image_bytes = 0;
+  std::uint16_t roi_width = 0, roi_height = 0, depth_count = 0, threshold = 0;
+  std::uint8_t reference_bytes = 0, detector = 0, delta_bytes = 0;
+  bool has_images = false, compact = false, channels_flag = false;
+};
+
+// Identity, size and checksum: what a random or damaged file fails on.
+Status check_identity(std::span<const std::byte> bytes, std::uint32_t& file_bytes) noexcept {
   const std::byte* b = bytes.data();
   const std::size_t n = bytes.size();
 
@@ -157,7 +170,7 @@ Status TableView::open(std::span<const std::byte> bytes, TableView& out) noexcep
   if (load_le<std::uint32_t>(b + off::kHeaderBytes) != table_format::kHeaderBytes) {
     return Status::kBadHeaderField;
   }
-  const std::uint32_t file_bytes = load_le<std::uint32_t>(b + off::kFileBytes);
+  file_bytes = load_le<std::uint32_t>(b + off::kFileBytes);
   if (file_bytes > n) return Status::kTruncated;
   if (file_bytes != n || file_bytes < table_format::kHeaderBytes) return Status::kSizeMismatch;
   // No checksum over a buffer larger than any valid table (seconds for gigabytes).
@@ -165,6 +178,10 @@ Status TableView::open(std::span<const std::byte> bytes, TableView& out) noexcep
 
   if (table_checksum(bytes) != load_le<std::uint32_t>(b + off::kCrc32)) return Status::kBadChecksum;
 
+  return Status::kOk;
+}
+
+Status check_header(const std::byte* b, HeaderFields& h) noexcept {
   // Header fields. Past the CRC only a deliberately crafted table reaches
   // here, but it must still be refused without any out-of-bounds read.
   // Flags: the model-images section from version 1.1, compact offsets from
@@ -244,23 +261,35 @@ Status TableView::open(std::span<const std::byte> bytes, TableView& out) noexcep
     image_bytes = static_cast<std::uint32_t>(bytes64);
   }
 
-  // The layout is canonical (table_format::layout_of), so any other offset is
-  // an error. The offsets index slots: pixels times orientation channels.
-  const std::uint32_t pixels = std::uint32_t{roi_width} * roi_height * channels;
-  const table_format::Layout layout = table_format::layout_of(
-      {cell_count, pixels, reference_count, reference_bytes, depth_count, model_point_count, image_bytes, delta_bytes, delta_count});
-  if (load_le<std::uint32_t>(b + off::kCellsOffset) != layout.cells ||
-      load_le<std::uint32_t>(b + off::kPixelOffsetsOffset) != layout.pixel_offsets ||
-      load_le<std::uint32_t>(b + off::kReferencesOffset) != layout.references ||
-      load_le<std::uint32_t>(b + off::kModelCountsOffset) != layout.model_counts ||
-      load_le<std::uint32_t>(b + off::kModelPointsOffset) != layout.model_points ||
-      (has_images && load_le<std::uint32_t>(b + off::kModelImagesOffset) != layout.model_images)) {
-    return Status::kSectionOutOfBounds;
-  }
-  if (layout.file_bytes != file_bytes) return Status::kSizeMismatch;
-  const std::uint32_t cells_at = layout.cells, offsets_at = layout.pixel_offsets, refs_at = layout.references,
-                      counts_at = layout.model_counts, points_at = layout.model_points;
+  h.flags = flags;
+  h.cell_count = cell_count;
+  h.reference_count = reference_count;
+  h.model_point_count = model_point_count;
+  h.delta_count = delta_count;
+  h.channels = channels;
+  h.image_bytes = image_bytes;
+  h.roi_width = roi_width;
+  h.roi_height = roi_height;
+  h.depth_count = depth_count;
+  h.threshold = threshold;
+  h.reference_bytes = reference_bytes;
+  h.detector = detector;
+  h.delta_bytes = delta_bytes;
+  h.has_images = has_images;
+  h.compact = compact;
+  h.channels_flag = channels_flag;
+  return Status::kOk;
+}
 
+// The CSR offsets and reference lists, in the table's offset encoding, and
+// then the cell descriptors against them.
+Status check_sections(const std::byte* b, const HeaderFields& h, const table_format::Layout& layout, std::uint32_t& stencil_max) noexcept {
+  const std::uint32_t pixels = std::uint32_t{h.roi_width} * h.roi_height * h.channels;
+  const std::uint32_t cell_count = h.cell_count, reference_count = h.reference_count, delta_count = h.delta_count;
+  const std::uint16_t depth_count = h.depth_count;
+  const std::uint8_t reference_bytes = h.reference_bytes, delta_bytes = h.delta_bytes;
+  const bool compact = h.compact;
+  const std::uint32_t cells_at = layout.cells, offsets_at = layout.pixel_offsets, refs_at = layout.references;
   // CSR offsets and lists, in the table's offset encoding.
   const std::byte* offsets = b + offsets_at;
   const std::byte* deltas =
@@ -297,7 +326,7 @@ Status TableView::open(std::span<const std::byte> bytes, TableView& out) noexcep
   // that add up to the reference count (each reference is one stencil pixel)
   // and match how often each cell is referenced.
   std::uint64_t stencil_total = 0;
-  std::uint32_t stencil_max = 0;
+  stencil_max = 0;
   for (std::uint32_t c = 0; c < cell_count; ++c) {
     const std::byte* d = b + cells_at + std::size_t{c} * table_format::kCellDescriptorBytes;
     for (std::size_t f = coff::kXLo; f <= coff::kThetaLo; f += 8) {
@@ -317,36 +346,64 @@ Status TableView::open(std::span<const std::byte> bytes, TableView& out) noexcep
     return Status::kStencilSizeMismatch;
   }
   GABARIT_TRY(with_reader(check_counts));
+  return Status::kOk;
+}
+
+}  // namespace
+
+Status TableView::open(std::span<const std::byte> bytes, TableView& out) noexcept {
+  const std::byte* b = bytes.data();
+  HeaderFields h;
+  GABARIT_TRY(check_identity(bytes, h.file_bytes));
+  GABARIT_TRY(check_header(b, h));
+
+  // The layout is canonical (table_format::layout_of), so any other offset is
+  // an error. The offsets index slots: pixels times orientation channels.
+  const std::uint32_t pixels = std::uint32_t{h.roi_width} * h.roi_height * h.channels;
+  const table_format::Layout layout = table_format::layout_of({h.cell_count, pixels, h.reference_count, h.reference_bytes, h.depth_count,
+                                                               h.model_point_count, h.image_bytes, h.delta_bytes, h.delta_count});
+  if (load_le<std::uint32_t>(b + off::kCellsOffset) != layout.cells ||
+      load_le<std::uint32_t>(b + off::kPixelOffsetsOffset) != layout.pixel_offsets ||
+      load_le<std::uint32_t>(b + off::kReferencesOffset) != layout.references ||
+      load_le<std::uint32_t>(b + off::kModelCountsOffset) != layout.model_counts ||
+      load_le<std::uint32_t>(b + off::kModelPointsOffset) != layout.model_points ||
+      (h.has_images && load_le<std::uint32_t>(b + off::kModelImagesOffset) != layout.model_images)) {
+    return Status::kSectionOutOfBounds;
+  }
+  if (layout.file_bytes != h.file_bytes) return Status::kSizeMismatch;
+  std::uint32_t stencil_max = 0;
+  GABARIT_TRY(check_sections(b, h, layout, stencil_max));
 
   std::uint64_t model_total = 0;
-  for (std::uint32_t d = 0; d < depth_count; ++d) model_total += load_le<std::uint32_t>(b + counts_at + std::size_t{d} * 4);
-  if (model_total != model_point_count) return Status::kSizeMismatch;
+  for (std::uint32_t d = 0; d < h.depth_count; ++d) model_total += load_le<std::uint32_t>(b + layout.model_counts + std::size_t{d} * 4);
+  if (model_total != h.model_point_count) return Status::kSizeMismatch;
 
   TableView view;
   view.base_ = b;
-  view.cells_ = b + cells_at;
-  view.pixel_offsets_ = offsets;
-  view.offset_deltas_ = deltas;
-  view.offset_delta_bytes_ = delta_bytes;
-  view.references_ = refs;
-  view.model_counts_ = b + counts_at;
-  view.model_points_ = b + points_at;
-  view.model_images_ = has_images ? b + layout.model_images : nullptr;
-  view.file_bytes_ = file_bytes;
-  view.cell_count_ = cell_count;
-  view.reference_count_ = reference_count;
+  view.cells_ = b + layout.cells;
+  view.pixel_offsets_ = b + layout.pixel_offsets;
+  view.offset_deltas_ = h.compact ? view.pixel_offsets_ + std::size_t{table_format::offset_block_count(pixels)} * table_format::kOffsetBlockHeaderBytes
+                                  : nullptr;
+  view.offset_delta_bytes_ = h.delta_bytes;
+  view.references_ = b + layout.references;
+  view.model_counts_ = b + layout.model_counts;
+  view.model_points_ = b + layout.model_points;
+  view.model_images_ = h.has_images ? b + layout.model_images : nullptr;
+  view.file_bytes_ = h.file_bytes;
+  view.cell_count_ = h.cell_count;
+  view.reference_count_ = h.reference_count;
   view.max_stencil_size_ = stencil_max;
-  view.model_point_count_ = model_point_count;
-  view.roi_width_ = roi_width;
-  view.channels_ = channels;
-  view.channel_bits_ = channels_flag ? 9u - table_format::orientation_channel_shift(channels) : 0u;  // log2 channels + 1
-  view.roi_height_ = roi_height;
+  view.model_point_count_ = h.model_point_count;
+  view.roi_width_ = h.roi_width;
+  view.channels_ = h.channels;
+  view.channel_bits_ = h.channels_flag ? 9u - table_format::orientation_channel_shift(h.channels) : 0u;  // log2 channels + 1
+  view.roi_height_ = h.roi_height;
   view.roi_origin_x_ = load_le<std::int16_t>(b + off::kRoiOriginX);
   view.roi_origin_y_ = load_le<std::int16_t>(b + off::kRoiOriginY);
-  view.detector_threshold_ = threshold;
-  view.depth_count_ = depth_count;
-  view.reference_bytes_ = reference_bytes;
-  view.detector_kind_ = static_cast<table_format::DetectorKind>(detector);
+  view.detector_threshold_ = h.threshold;
+  view.depth_count_ = h.depth_count;
+  view.reference_bytes_ = h.reference_bytes;
+  view.detector_kind_ = static_cast<table_format::DetectorKind>(h.detector);
   out = view;
   return Status::kOk;
 }
