@@ -70,6 +70,53 @@ bool valid(const RecoveryOptions& o) noexcept {
          within_limit(o.turn_deg, 360.0f);
 }
 
+namespace {
+
+// Where a search is centred: the last confident pose, or (extrapolate) where
+// the target would be at its last confident velocity. However long the target
+// has been lost, the extrapolated centre stays where a target can be seen:
+// inside the frame, and within half a turn of the last confident angle (a
+// rotation is periodic). Without this a long lost period walked the centre
+// out of range (past +-1e6 px after ~3e5 frames at a few px per frame) and
+// every search failed.
+Pose search_centre(const LastSighting& last, bool extrapolate, const ImageView& image) noexcept {
+  Pose centre = last.pose;
+  if (!extrapolate) return centre;
+  const float n = static_cast<float>(last.frames_since < kMaxExtrapolatedFrames ? last.frames_since : kMaxExtrapolatedFrames);
+  centre.x += n * last.motion.vx;
+  centre.y += n * last.motion.vy;
+  if (image.valid()) {
+    centre.x = clamp_to(centre.x, 0.0f, static_cast<float>(image.width - 1));
+    centre.y = clamp_to(centre.y, 0.0f, static_cast<float>(image.height - 1));
+  }
+  const float turn = n * last.motion.vtheta;
+  centre.theta_deg += turn - 360.0f * static_cast<float>(round_to_int(turn / 360.0f));
+  return centre;
+}
+
+// The three best placements by score, best first (a later equal score does
+// not displace an earlier one).
+struct SearchShortlist {
+  static constexpr int kSize = 3;
+  Pose pose[kSize];
+  float score[kSize] = {-1.0f, -1.0f, -1.0f};
+  void offer(const Pose& p, float s) noexcept {
+    for (int k = 0; k < kSize; ++k) {
+      if (s > score[k]) {
+        for (int m = kSize - 1; m > k; --m) {
+          pose[m] = pose[m - 1];
+          score[m] = score[m - 1];
+        }
+        pose[k] = p;
+        score[k] = s;
+        return;
+      }
+    }
+  }
+};
+
+}  // namespace
+
 Status RecoverySearch::run(const ImageView& image, const RecoveryOptions& options, const LastSighting& last,
                            std::uint16_t screen_depth, SessionScratch scratch, SearchResult& out) noexcept {
   GABARIT_ASSERT(valid(options));
@@ -80,29 +127,11 @@ Status RecoverySearch::run(const ImageView& image, const RecoveryOptions& option
   // Alternate searches: where the target would be at its last confident
   // velocity; where it was last seen.
   const bool extrapolate = searches_++ % 2 == 0;
-  Pose centre = last.pose;
-  if (extrapolate) {
-    // However long the target has been lost, the extrapolated centre stays
-    // where a target can be seen: inside the frame, and within half a turn
-    // of the last confident angle (a rotation is periodic). Without this a
-    // long lost period walked the centre out of range (past +-1e6 px after
-    // ~3e5 frames at a few px per frame) and every search failed.
-    const float n = static_cast<float>(last.frames_since < kMaxExtrapolatedFrames ? last.frames_since : kMaxExtrapolatedFrames);
-    centre.x += n * last.motion.vx;
-    centre.y += n * last.motion.vy;
-    if (image.valid()) {
-      centre.x = clamp_to(centre.x, 0.0f, static_cast<float>(image.width - 1));
-      centre.y = clamp_to(centre.y, 0.0f, static_cast<float>(image.height - 1));
-    }
-    const float turn = n * last.motion.vtheta;
-    centre.theta_deg += turn - 360.0f * static_cast<float>(round_to_int(turn / 360.0f));
-  }
+  const Pose centre = search_centre(last, extrapolate, image);
   // Each placement's fine vote goes to a shortlist of the three best scores;
   // each of those is then voted again from its own estimate (the target, once
   // centred in the ROI, scores far above clutter) and the best is kept.
-  constexpr int kShortlist = 3;
-  Pose shortlist[kShortlist];
-  float shortlist_score[kShortlist] = {-1.0f, -1.0f, -1.0f};
+  SearchShortlist shortlist;
   // A grid search with scratch for it detects features once, over the whole
   // search window, and scores each placement from them (map_features).
   const std::uint32_t reach = search_reach(fine_);
@@ -145,18 +174,7 @@ Status RecoverySearch::run(const ImageView& image, const RecoveryOptions& option
     } else {
       GABARIT_TRY(track_step(fine_, detector_, image, p, scratch.fine, trial));
     }
-    if (trial.best.votes == 0) return Status::kOk;
-    for (int k = 0; k < kShortlist; ++k) {
-      if (trial.score > shortlist_score[k]) {
-        for (int m = kShortlist - 1; m > k; --m) {
-          shortlist[m] = shortlist[m - 1];
-          shortlist_score[m] = shortlist_score[m - 1];
-        }
-        shortlist[k] = trial.pose;
-        shortlist_score[k] = trial.score;
-        break;
-      }
-    }
+    if (trial.best.votes != 0) shortlist.offer(trial.pose, trial.score);
     return Status::kOk;
   };
   if (coarse_ != nullptr) {
@@ -194,9 +212,9 @@ Status RecoverySearch::run(const ImageView& image, const RecoveryOptions& option
   }
   Pose from = centre;
   float best = -1.0f;
-  for (int k = 0; k < kShortlist && shortlist_score[k] >= 0.0f; ++k) {
+  for (int k = 0; k < SearchShortlist::kSize && shortlist.score[k] >= 0.0f; ++k) {
     StepResult again;
-    GABARIT_TRY(track_step(fine_, detector_, image, shortlist[k], scratch.fine, again));
+    GABARIT_TRY(track_step(fine_, detector_, image, shortlist.pose[k], scratch.fine, again));
     if (again.score > best) {
       best = again.score;
       from = again.pose;
