@@ -195,15 +195,10 @@ std::string frame_json(const FrameRecord& r) {
   return s.str();
 }
 
-void write_report(const std::string& dir, const RunConfig& config, const RunResult& result, const std::vector<app::PoseSample>& truth) {
-  std::filesystem::create_directories(dir);
-  const std::filesystem::path d(dir);
-  std::map<std::uint32_t, app::PoseSample> truth_by_frame;
-  for (const app::PoseSample& t : truth) truth_by_frame[t.frame] = t;
-  const Figures f = figures(result);
-  const std::vector<Check> checks = run_checks(result);
+namespace {
 
-  // frames.csv and poses.csv
+// frames.csv, poses.csv, faults.csv and (a soak) soak.csv.
+void write_csvs(const std::filesystem::path& d, const RunConfig& config, const RunResult& result) {
   std::string frames = std::string(app::kPoseCsvHeader) +
                        ",fate,reason,reference,latency_us,dut_us,cycles,wire_bytes,fault,camera_us,track_us,strobe_us\n";
   std::string poses = std::string(app::kPoseCsvHeader) + "\n";
@@ -230,8 +225,12 @@ void write_report(const std::string& dir, const RunConfig& config, const RunResu
     app::write_file((d / "soak.csv").string(), soak);
   }
 
-  // Accuracy against ground truth, over the frames the run had.
-  std::string accuracy = "null";
+}
+
+// Accuracy against ground truth over the frames the run had; `accuracy` its
+// JSON ("null" without ground truth).
+app::Accuracy accuracy_against(const RunResult& result, const std::vector<app::PoseSample>& truth, std::string& accuracy) {
+  accuracy = "null";
   app::Accuracy a;
   if (!truth.empty()) {
     std::vector<app::PoseSample> got, want;
@@ -246,10 +245,14 @@ void write_report(const std::string& dir, const RunConfig& config, const RunResu
     while (!accuracy.empty() && (accuracy.back() == '\n' || accuracy.back() == ' ')) accuracy.pop_back();
   }
 
+  return a;
+}
+
+// summary.json.
+std::string summary_json(const RunConfig& config, const RunResult& result, const Figures& f, const std::vector<Check>& checks,
+                         std::size_t failed, const std::string& accuracy) {
   const link::Caps& c = result.caps;
   std::ostringstream s;
-  std::size_t failed = 0;
-  for (const Check& k : checks) failed += !k.passed;
   s << "{\n  \"dut\": {\"kind\": " << json_string(c.kind) << ", \"board\": " << json_string(c.board)
     << ", \"firmware\": " << json_string(c.firmware) << ", \"device_id\": \"" << std::hex << c.device_id << std::dec
     << "\", \"table_crc32\": " << c.table_crc << ", \"table_bytes\": " << c.table_bytes << ", \"clock_hz\": " << c.clock_hz
@@ -306,10 +309,15 @@ void write_report(const std::string& dir, const RunConfig& config, const RunResu
     s << (i ? ",\n    " : "\n    ") << "{\"name\": " << json_string(checks[i].name) << ", \"passed\": "
       << (checks[i].passed ? "true" : "false") << ", \"message\": " << json_string(checks[i].message) << "}";
   s << "\n  ],\n  \"error\": " << json_string(result.error) << ",\n  \"seconds\": " << num(result.seconds, 2) << "\n}\n";
-  app::write_file((d / "summary.json").string(), s.str());
 
-  // JUnit: one testsuite, a testcase per check (faults included), the
-  // figures as properties.
+  return s.str();
+}
+
+// junit.xml: one testsuite, a testcase per check (faults included), the
+// figures as properties.
+std::string junit_xml(const RunResult& result, const Figures& f, const std::vector<Check>& checks, std::size_t failed,
+                      const std::vector<app::PoseSample>& truth, const app::Accuracy& a) {
+  const link::Caps& c = result.caps;
   std::ostringstream j;
   const std::string suite = std::string("hil.") + (c.kind[0] ? c.kind : "dut");
   j << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<testsuites>\n<testsuite name=\"" << xml(suite) << "\" tests=\"" << checks.size()
@@ -344,9 +352,15 @@ void write_report(const std::string& dir, const RunConfig& config, const RunResu
     j << "</testcase>\n";
   }
   j << "</testsuite>\n</testsuites>\n";
-  app::write_file((d / "junit.xml").string(), j.str());
 
-  // Plots and the Markdown report.
+  return j.str();
+}
+
+// error.svg, trajectory.svg, latency.svg, faults.svg: the names of those written.
+std::vector<std::string> write_plots(const std::filesystem::path& d, const RunResult& result, const Figures& f,
+                                     const std::vector<app::PoseSample>& truth) {
+  std::map<std::uint32_t, app::PoseSample> truth_by_frame;
+  for (const app::PoseSample& t : truth) truth_by_frame[t.frame] = t;
   std::vector<app::svg::Series> error_series(1), trajectory(2), histogram(1);
   error_series[0].label = "pose error (px)";
   trajectory[0].label = "truth";
@@ -384,6 +398,14 @@ void write_report(const std::string& dir, const RunConfig& config, const RunResu
   app::svg::write((d / "faults.svg").string(), fault_timeline(result));
   plots.push_back("faults.svg");
 
+  return plots;
+}
+
+// report.md.
+std::string markdown(const RunConfig& config, const RunResult& result, const Figures& f, const std::vector<Check>& checks,
+                     std::size_t failed, const std::vector<app::PoseSample>& truth, const app::Accuracy& a,
+                     const std::vector<std::string>& plots) {
+  const link::Caps& c = result.caps;
   std::ostringstream m;
   m << "# HIL run: " << (c.kind[0] ? c.kind : "(no DUT)") << "\n\n"
     << "| | |\n|---|---|\n| DUT | " << c.kind << " on " << c.board << ", " << c.firmware << ", device id " << std::hex << c.device_id
@@ -414,7 +436,25 @@ void write_report(const std::string& dir, const RunConfig& config, const RunResu
   for (const Check& k : checks) m << "| " << k.name << " | " << (k.passed ? "pass" : "**FAIL**") << " | " << k.message << " |\n";
   m << "\n## Plots\n\n";
   for (const std::string& p : plots) m << "![" << p << "](" << p << ")\n\n";
-  app::write_file((d / "report.md").string(), m.str());
+  return m.str();
+}
+
+}  // namespace
+
+void write_report(const std::string& dir, const RunConfig& config, const RunResult& result, const std::vector<app::PoseSample>& truth) {
+  std::filesystem::create_directories(dir);
+  const std::filesystem::path d(dir);
+  const Figures f = figures(result);
+  const std::vector<Check> checks = run_checks(result);
+  std::size_t failed = 0;
+  for (const Check& k : checks) failed += !k.passed;
+  write_csvs(d, config, result);
+  std::string accuracy;
+  const app::Accuracy a = accuracy_against(result, truth, accuracy);
+  app::write_file((d / "summary.json").string(), summary_json(config, result, f, checks, failed, accuracy));
+  app::write_file((d / "junit.xml").string(), junit_xml(result, f, checks, failed, truth, a));
+  const std::vector<std::string> plots = write_plots(d, result, f, truth);
+  app::write_file((d / "report.md").string(), markdown(config, result, f, checks, failed, truth, a, plots));
 }
 
 }  // namespace gabarit::hil
