@@ -34,25 +34,27 @@ Status check(const ImageView& image, const ImageWindow& window) noexcept {
 
 inline std::int32_t abs32(std::int32_t v) noexcept { return v < 0 ? -v : v; }
 
-}  // namespace
-
-std::uint16_t gradient_magnitude(const ImageView& image, std::uint32_t x, std::uint32_t y) noexcept {
-  if (x == 0 || y == 0 || x + 1 >= image.width || y + 1 >= image.height) return 0;
-  const std::uint8_t* up = image.pixels + std::size_t{y - 1} * image.stride + x;
-  const std::uint8_t* mid = up + image.stride;
-  const std::uint8_t* down = mid + image.stride;
-  const std::int32_t gx = (up[1] + 2 * mid[1] + down[1]) - (up[-1] + 2 * mid[-1] + down[-1]);
-  const std::int32_t gy = (down[-1] + 2 * down[0] + down[1]) - (up[-1] + 2 * up[0] + up[1]);
-  return static_cast<std::uint16_t>(abs32(gx) + abs32(gy));
-}
-
-SobelGradient sobel_gradient(const ImageView& image, std::uint32_t x, std::uint32_t y) noexcept {
-  if (x == 0 || y == 0 || x + 1 >= image.width || y + 1 >= image.height) return {};
-  const std::uint8_t* up = image.pixels + std::size_t{y - 1} * image.stride + x;
+// The 3x3 Sobel operator at an interior pixel (1 <= x < width - 1, likewise
+// y): the one body every detector and every orientation uses.
+inline SobelGradient sobel_interior(const ImageView& image, std::size_t x, std::size_t y) noexcept {
+  const std::uint8_t* up = image.pixels + (y - 1) * image.stride + x;
   const std::uint8_t* mid = up + image.stride;
   const std::uint8_t* down = mid + image.stride;
   return {(up[1] + 2 * mid[1] + down[1]) - (up[-1] + 2 * mid[-1] + down[-1]),
           (down[-1] + 2 * down[0] + down[1]) - (up[-1] + 2 * up[0] + up[1])};
+}
+
+}  // namespace
+
+std::uint16_t gradient_magnitude(const ImageView& image, std::uint32_t x, std::uint32_t y) noexcept {
+  if (x == 0 || y == 0 || x + 1 >= image.width || y + 1 >= image.height) return 0;
+  const SobelGradient g = sobel_interior(image, x, y);
+  return static_cast<std::uint16_t>(abs32(g.gx) + abs32(g.gy));
+}
+
+SobelGradient sobel_gradient(const ImageView& image, std::uint32_t x, std::uint32_t y) noexcept {
+  if (x == 0 || y == 0 || x + 1 >= image.width || y + 1 >= image.height) return {};
+  return sobel_interior(image, x, y);
 }
 
 namespace {
@@ -176,15 +178,6 @@ Status extract_gradient_rows(const ImageView& image, const ImageWindow& window, 
 
 namespace {
 
-// Sobel gx, gy at an interior pixel.
-inline void sobel(const ImageView& image, std::int64_t x, std::int64_t y, std::int32_t& gx, std::int32_t& gy) noexcept {
-  const std::uint8_t* up = image.pixels + static_cast<std::size_t>(y - 1) * image.stride + x;
-  const std::uint8_t* mid = up + image.stride;
-  const std::uint8_t* down = mid + image.stride;
-  gx = (up[1] + 2 * mid[1] + down[1]) - (up[-1] + 2 * mid[-1] + down[-1]);
-  gy = (down[-1] + 2 * down[0] + down[1]) - (up[-1] + 2 * up[0] + up[1]);
-}
-
 inline std::uint16_t magnitude_at(const ImageView& image, std::int64_t x, std::int64_t y) noexcept {
   return gradient_magnitude(image, static_cast<std::uint32_t>(x), static_cast<std::uint32_t>(y));
 }
@@ -201,8 +194,8 @@ Status extract_canny(const ImageView& image, const ImageWindow& window, std::uin
   if (s.empty()) return Status::kOk;
   for (std::int64_t y = s.y_begin; y < s.y_end; ++y) {
     for (std::int64_t x = s.x_begin; x < s.x_end; ++x) {
-      std::int32_t gx = 0, gy = 0;
-      sobel(image, x, y, gx, gy);
+      const SobelGradient g = sobel_interior(image, static_cast<std::size_t>(x), static_cast<std::size_t>(y));
+      const std::int32_t gx = g.gx, gy = g.gy;
       const std::int32_t ax = abs32(gx), ay = abs32(gy);
       const auto m = static_cast<std::uint16_t>(ax + ay);
       if (m < low) continue;
