@@ -2,11 +2,11 @@
 
 #include <cctype>
 #include <cmath>
-#include <fstream>
 #include <map>
 #include <sstream>
 
 #include "gabarit/app/error.hpp"
+#include "gabarit/app/files.hpp"
 
 namespace gabarit::app {
 
@@ -33,8 +33,7 @@ std::uint32_t count_field(const std::string& f, std::uint32_t max) {
 }  // namespace
 
 std::vector<PoseSample> read_pose_csv(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw app::Error(path + ": cannot open");
+  std::istringstream in(read_text(path));
   return read_pose_csv(in, path);
 }
 

@@ -68,6 +68,11 @@ std::vector<std::byte> read_file(const std::string& path, std::size_t max_bytes)
   }
 }
 
+std::string read_text(const std::string& path, std::size_t max_bytes) {
+  const std::vector<std::byte> bytes = read_file(path, max_bytes);
+  return std::string(reinterpret_cast<const char*>(bytes.data()), bytes.size());
+}
+
 TableFile::TableFile(const std::string& path) {
   namespace tf = table_format;
   Fd f{open_input(path)};

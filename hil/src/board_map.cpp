@@ -1,10 +1,11 @@
 #include "gabarit/hil/board_map.hpp"
 
 #include <cstdlib>
-#include <fstream>
+#include <filesystem>
 #include <sstream>
 
 #include "gabarit/app/error.hpp"
+#include "gabarit/app/files.hpp"
 #ifdef GABARIT_HAVE_LINK_USB
 #include "gabarit/link/usb_host.hpp"
 #endif
@@ -88,11 +89,9 @@ BoardMap load_board_map(const std::string& name_or_path, const std::string& boar
   const bool yaml = name_or_path.size() > 5 && name_or_path.compare(name_or_path.size() - 5, 5, ".yaml") == 0;
   const bool is_path = name_or_path.find('/') != std::string::npos || yaml;
   const std::string path = is_path ? name_or_path : boards_dir + "/" + name_or_path + ".yaml";
-  std::ifstream in(path);
-  if (!in) throw app::Error(path + ": no such board map" + (is_path ? "" : " (hil/boards/ lists the boards)"));
-  std::stringstream text;
-  text << in.rdbuf();
-  return parse_board_map(text.str(), path);
+  if (!std::filesystem::exists(path))
+    throw app::Error(path + ": no such board map" + (is_path ? "" : " (hil/boards/ lists the boards)"));
+  return parse_board_map(app::read_text(path, 1u << 20), path);
 }
 
 }  // namespace gabarit::hil

@@ -13,7 +13,6 @@
 #include <atomic>
 #include <cerrno>
 #include <cstring>
-#include <fstream>
 #include <iterator>
 
 #include "gabarit/app/error.hpp"
@@ -281,9 +280,7 @@ class QemuDut final : public DutDriver {
     const ElfSymbol end = find_elf_symbol(options_.firmware, "gabarit_table_slot_end");
     if (end.address < slot.address) throw app::Error(options_.firmware + ": the table slot ends before it begins");
     slot.size = end.address - slot.address;
-    std::ifstream table(options_.table_path, std::ios::binary | std::ios::ate);
-    if (!table) throw app::Error(options_.table_path + ": cannot open the table");
-    const auto bytes = static_cast<std::uint64_t>(table.tellg());
+    const auto bytes = static_cast<std::uint64_t>(app::read_file(options_.table_path).size());
     if (bytes > slot.size)
       throw app::Error(options_.table_path + ": " + std::to_string(bytes) + " bytes; the firmware's table slot holds " +
                        std::to_string(slot.size));
@@ -512,9 +509,9 @@ T read_le(const std::vector<unsigned char>& b, std::size_t at) {
 }  // namespace
 
 ElfSymbol find_elf_symbol(const std::string& elf_path, const std::string& name) {
-  std::ifstream in(elf_path, std::ios::binary);
-  if (!in) throw app::Error(elf_path + ": cannot open the firmware");
-  const std::vector<unsigned char> b((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::vector<std::byte> file = app::read_file(elf_path);
+  const std::vector<unsigned char> b(reinterpret_cast<const unsigned char*>(file.data()),
+                                     reinterpret_cast<const unsigned char*>(file.data()) + file.size());
   try {
     if (b.size() < 52 || std::memcmp(b.data(), "\x7f" "ELF", 4) != 0 || b[4] != 1 || b[5] != 1)
       throw app::Error("not a little-endian ELF32 file");

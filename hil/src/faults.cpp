@@ -2,10 +2,10 @@
 
 #include <algorithm>
 #include <cstdlib>
-#include <fstream>
 #include <sstream>
 
 #include "gabarit/app/error.hpp"
+#include "gabarit/app/files.hpp"
 #include "gabarit/app/rng.hpp"
 #include "gabarit/link/rig_faults.hpp"
 
@@ -58,8 +58,7 @@ const PlannedFault* FaultPlan::at(std::uint32_t frame) const {
 }
 
 FaultPlan read_fault_file(const std::string& path, std::uint32_t frames) {
-  std::ifstream in(path);
-  if (!in) throw app::Error(path + ": cannot open the fault file");
+  std::istringstream in(app::read_text(path, 1u << 24));
   FaultPlan plan;
   std::string line;
   for (int number = 1; std::getline(in, line); ++number) {

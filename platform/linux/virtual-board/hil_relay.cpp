@@ -40,6 +40,8 @@
 #include <thread>
 #include <vector>
 
+#include "gabarit/app/error.hpp"
+#include "gabarit/app/files.hpp"
 #include "gabarit/crc32.hpp"
 #include "gabarit/link/cobs.hpp"
 #include "gabarit/link/dut_endpoint.hpp"
@@ -867,12 +869,10 @@ int Relay::run() {
   device.software = "gabarit-board";
   if (!c_.table.empty()) {
     std::vector<std::byte> bytes;
-    if (std::FILE* f = std::fopen(c_.table.c_str(), "rb")) {
-      std::byte buf[65536];
-      for (std::size_t n; (n = std::fread(buf, 1, sizeof buf, f)) > 0;) bytes.insert(bytes.end(), buf, buf + n);
-      std::fclose(f);
-    } else {
-      return log("cannot read the table %s", c_.table.c_str()), 1;
+    try {
+      bytes = app::read_file(c_.table);
+    } catch (const app::Error& e) {
+      return log("cannot read the table: %s", e.what()), 1;
     }
     device.table_crc = crc32(bytes);
     device.table_bytes = static_cast<std::uint32_t>(bytes.size());

@@ -29,6 +29,8 @@ namespace gabarit::app {
 // The whole of a regular file (or of a pipe, up to max_bytes). Throws
 // app::Error "PATH: ..." when it cannot be read or is larger than max_bytes.
 std::vector<std::byte> read_file(const std::string& path, std::size_t max_bytes = std::size_t{1} << 30);
+// The same, as text (CSV, plans, maps): the one way host code opens a file to read.
+std::string read_text(const std::string& path, std::size_t max_bytes = std::size_t{1} << 30);
 
 // A table file read into owned, 8-byte-aligned memory and validated once
 // (TableView::open). The header's size is checked against the file's before

@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cctype>
 #include <cstdio>
-#include <fstream>
 #include <sstream>
 
 #include "gabarit/features.hpp"
@@ -14,8 +13,7 @@
 namespace gabarit::host {
 
 std::vector<Point> read_points_csv(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw app::Error(path + ": cannot open");
+  std::istringstream in(app::read_text(path));
   return read_points_csv(in, path);
 }
 
