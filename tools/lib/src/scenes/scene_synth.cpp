@@ -316,7 +316,104 @@ bool parse_from(const std::string& s, E& out, const std::array<E, N>& all) {
   return false;
 }
 
+// The smooth trajectory of a scene (sinusoids of random periods and phases,
+// drawn from `rng` in a fixed order) and its depth schedule.
+class ScenePath {
+ public:
+  ScenePath(const SceneOptions& o, double margin, app::Rng& rng)
+      : o_(o),
+        px_(90 + 40 * rng.next_unit()), py_(70 + 40 * rng.next_unit()), pt_(120 + 60 * rng.next_unit()),
+        phx_(2 * kPi * rng.next_unit()), phy_(2 * kPi * rng.next_unit()), pht_(2 * kPi * rng.next_unit()) {
+    const bool slow = o.motion == SceneMotion::kSweep || o.motion == SceneMotion::kSpin;
+    const double speed = o.max_speed_px * (slow ? 0.6 : o.motion == SceneMotion::kStopGo ? 1.0 / 1.6 : 1.0);
+    ax_ = std::min(speed * px_ / (2 * kPi), o.width / 2.0 - margin);
+    ay_ = std::min(speed * py_ / (2 * kPi), o.height / 2.0 - margin);
+    at_ = o.max_turn_deg * pt_ / (2 * kPi);
+    depth_every_ = o.motion == SceneMotion::kSweep ? 6 : 20;
+  }
+  int depth_at(double t) const {  // up and down the stack
+    const int period = 2 * std::max(1, o_.depths - 1);
+    const int phase = static_cast<int>(t / depth_every_) % period;
+    return o_.depths <= 1 ? 0 : (phase < o_.depths ? phase : period - phase);
+  }
+  Pose4 at(double t) const {
+    return Pose4{o_.width / 2.0 + ax_ * std::sin(2 * kPi * t / px_ + phx_), o_.height / 2.0 + ay_ * std::sin(2 * kPi * t / py_ + phy_),
+                 at_ * std::sin(2 * kPi * t / pt_ + pht_), depth_at(t)};
+  }
+
+ private:
+  const SceneOptions& o_;
+  double px_, py_, pt_, phx_, phy_, pht_;
+  double ax_ = 0, ay_ = 0, at_ = 0;
+  int depth_every_ = 20;
+};
+
+// The pose at every frame, path[f + 1] for frame f and path[0] the instant
+// before: the smooth path (smooth, sweep), its clock run in bursts (stop-go),
+// a steady spin, or a velocity random walk reversed at the margins (walk).
+std::vector<Pose4> scene_path(const SceneOptions& o, double margin, const ScenePath& smooth, app::Rng& rng) {
+  std::vector<Pose4> path(o.frames + 1);
+  if (o.motion == SceneMotion::kSmooth || o.motion == SceneMotion::kSweep) {
+    for (std::uint32_t f = 0; f <= o.frames; ++f) path[f] = smooth.at(static_cast<double>(f) - 1.0);
+  } else if (o.motion == SceneMotion::kStopGo) {
+    // The smooth path's clock runs in bursts: 0 or 1.6x for 10..29 frames each.
+    double clock = -1;
+    bool moving = rng.next_unit() < 0.5;
+    int left = 10 + static_cast<int>(20 * rng.next_unit());
+    for (std::uint32_t f = 0; f <= o.frames; ++f) {
+      path[f] = smooth.at(clock);
+      path[f].depth = smooth.depth_at(static_cast<double>(f) - 1.0);
+      if (--left <= 0) moving = !moving, left = 10 + static_cast<int>(20 * rng.next_unit());
+      clock += moving ? 1.6 : 0.0;
+    }
+  } else if (o.motion == SceneMotion::kSpin) {
+    const double rate = (rng.next_unit() < 0.5 ? -1.0 : 1.0) * 1.2;
+    for (std::uint32_t f = 0; f <= o.frames; ++f) {
+      path[f] = smooth.at(static_cast<double>(f) - 1.0);
+      path[f].theta = rate * (static_cast<double>(f) - 1.0);
+    }
+  } else {  // kWalk: velocity random walk, reversed at the margins
+    const double vmax = o.max_speed_px, turn_max = o.max_turn_deg;
+    double x = o.width / 2.0, y = o.height / 2.0, theta = 0, vx = 0, vy = 0, vt = 0;
+    const double lo_x = margin, hi_x = o.width - margin, lo_y = margin, hi_y = o.height - margin;
+    for (std::uint32_t f = 0; f <= o.frames; ++f) {
+      path[f] = {x, y, theta, smooth.depth_at(static_cast<double>(f) - 1.0)};
+      vx = std::clamp(vx + 1.2 * (rng.next_unit() - 0.5), -vmax, vmax);
+      vy = std::clamp(vy + 1.2 * (rng.next_unit() - 0.5), -vmax, vmax);
+      vt = std::clamp(vt + 0.4 * (rng.next_unit() - 0.5), -turn_max, turn_max);
+      if (x + vx < lo_x || x + vx > hi_x) vx = -vx;
+      if (y + vy < lo_y || y + vy > hi_y) vy = -vy;
+      if (std::fabs(theta + vt) > 30) vt = -vt;
+      x += vx, y += vy, theta += vt;
+    }
+  }
+  return path;
+}
+
+// The occluder's square of brick, at its final place over the object shifted
+// back towards its side by (1 - travel) of its side, painted into `frame`;
+// returns the share of the object (`cover`, its alpha) it hides.
+double paint_occluder(Plane& frame, const Plane& cover, const Plane& brick, const Pose4& p, double travel, int side,
+                      OcclusionSide from, double gain) {
+  int ox = static_cast<int>(std::lround(p.x)) - side / 2, oy = static_cast<int>(std::lround(p.y)) - side / 2;
+  const int shift = static_cast<int>(std::lround((1 - travel) * side));
+  if (from == OcclusionSide::kLeft) ox -= shift;
+  if (from == OcclusionSide::kRight) ox += shift;
+  if (from == OcclusionSide::kTop) oy -= shift;
+  if (from == OcclusionSide::kBottom) oy += shift;
+  double covered = 0, total = 0;
+  for (double a : cover.v) total += a;
+  for (int y = 0; y < side; ++y)
+    for (int x = 0; x < side; ++x)
+      if (ox + x >= 0 && oy + y >= 0 && ox + x < frame.w && oy + y < frame.h) {
+        frame.at(ox + x, oy + y) = gain * brick.at((x + 200) % brick.w, (y + 100) % brick.h);
+        covered += cover.at(ox + x, oy + y);
+      }
+  return total > 0 ? covered / total : 1;
+}
+
 }  // namespace
+
 
 const char* name_of(SceneObject v) noexcept {
   switch (v) {
@@ -484,60 +581,11 @@ SceneSummary write_scene_sequence(const SceneOptions& options, const std::string
   // The trajectory, one pose per frame and one before the first (motion blur
   // interpolates between them).
   app::Rng rng(o.seed);
-  const double px = 90 + 40 * rng.next_unit(), py = 70 + 40 * rng.next_unit(), pt = 120 + 60 * rng.next_unit();
-  const double phx = 2 * kPi * rng.next_unit(), phy = 2 * kPi * rng.next_unit(), pht = 2 * kPi * rng.next_unit();
-  const bool slow = o.motion == SceneMotion::kSweep || o.motion == SceneMotion::kSpin;
-  const double speed = o.max_speed_px * (slow ? 0.6 : o.motion == SceneMotion::kStopGo ? 1.0 / 1.6 : 1.0);
   const double margin = std::ceil(1.4143 * object.half) + 4;  // the rotated object stays inside the image
-  const double ax = std::min(speed * px / (2 * kPi), o.width / 2.0 - margin);
-  const double ay = std::min(speed * py / (2 * kPi), o.height / 2.0 - margin);
-  const double at = o.max_turn_deg * pt / (2 * kPi);
-  const int depth_every = o.motion == SceneMotion::kSweep ? 6 : 20;
-  const auto depth_at = [&](double t) {  // up and down the stack
-    const int period = 2 * std::max(1, o.depths - 1);
-    const int phase = static_cast<int>(t / depth_every) % period;
-    return o.depths <= 1 ? 0 : (phase < o.depths ? phase : period - phase);
-  };
-  const auto smooth_at = [&](double t) {
-    return Pose4{o.width / 2.0 + ax * std::sin(2 * kPi * t / px + phx), o.height / 2.0 + ay * std::sin(2 * kPi * t / py + phy),
-                 at * std::sin(2 * kPi * t / pt + pht), depth_at(t)};
-  };
-  std::vector<Pose4> path(o.frames + 1);  // path[f + 1] is frame f; path[0] the instant before
+  const ScenePath smooth(o, margin, rng);
+  const std::vector<Pose4> path = scene_path(o, margin, smooth, rng);
   const bool smooth_path = o.motion == SceneMotion::kSmooth || o.motion == SceneMotion::kSweep;
-  if (smooth_path) {
-    for (std::uint32_t f = 0; f <= o.frames; ++f) path[f] = smooth_at(static_cast<double>(f) - 1.0);
-  } else if (o.motion == SceneMotion::kStopGo) {
-    // The smooth path's clock runs in bursts: 0 or 1.6x for 10..29 frames each.
-    double clock = -1;
-    bool moving = rng.next_unit() < 0.5;
-    int left = 10 + static_cast<int>(20 * rng.next_unit());
-    for (std::uint32_t f = 0; f <= o.frames; ++f) {
-      path[f] = smooth_at(clock);
-      path[f].depth = depth_at(static_cast<double>(f) - 1.0);
-      if (--left <= 0) moving = !moving, left = 10 + static_cast<int>(20 * rng.next_unit());
-      clock += moving ? 1.6 : 0.0;
-    }
-  } else if (o.motion == SceneMotion::kSpin) {
-    const double rate = (rng.next_unit() < 0.5 ? -1.0 : 1.0) * 1.2;
-    for (std::uint32_t f = 0; f <= o.frames; ++f) {
-      path[f] = smooth_at(static_cast<double>(f) - 1.0);
-      path[f].theta = rate * (static_cast<double>(f) - 1.0);
-    }
-  } else {  // kWalk: velocity random walk, reversed at the margins
-    const double vmax = o.max_speed_px, turn_max = o.max_turn_deg;
-    double x = o.width / 2.0, y = o.height / 2.0, theta = 0, vx = 0, vy = 0, vt = 0;
-    const double lo_x = margin, hi_x = o.width - margin, lo_y = margin, hi_y = o.height - margin;
-    for (std::uint32_t f = 0; f <= o.frames; ++f) {
-      path[f] = {x, y, theta, depth_at(static_cast<double>(f) - 1.0)};
-      vx = std::clamp(vx + 1.2 * (rng.next_unit() - 0.5), -vmax, vmax);
-      vy = std::clamp(vy + 1.2 * (rng.next_unit() - 0.5), -vmax, vmax);
-      vt = std::clamp(vt + 0.4 * (rng.next_unit() - 0.5), -turn_max, turn_max);
-      if (x + vx < lo_x || x + vx > hi_x) vx = -vx;
-      if (y + vy < lo_y || y + vy > hi_y) vy = -vy;
-      if (std::fabs(theta + vt) > 30) vt = -vt;
-      x += vx, y += vy, theta += vt;
-    }
-  }
+  const auto smooth_at = [&](double t) { return smooth.at(t); };
 
   // The occluder: a square of brick a little larger than the object; for a
   // side, it slides in over 8 frames, stays, and slides back out.
@@ -588,25 +636,8 @@ SceneSummary write_scene_sequence(const SceneOptions& options, const std::string
       composite(frame, layer, p.x, p.y, p.theta, gain, &cover);
     }
     double hidden = 0;
-    if (const double travel = occluder_cover(f); travel > 0) {
-      // The occluder's square, at its final place over the object, shifted
-      // back towards its side by (1 - travel) of its side.
-      int ox = static_cast<int>(std::lround(p.x)) - occluder_side / 2, oy = static_cast<int>(std::lround(p.y)) - occluder_side / 2;
-      const int shift = static_cast<int>(std::lround((1 - travel) * occluder_side));
-      if (o.occlusion_side == OcclusionSide::kLeft) ox -= shift;
-      if (o.occlusion_side == OcclusionSide::kRight) ox += shift;
-      if (o.occlusion_side == OcclusionSide::kTop) oy -= shift;
-      if (o.occlusion_side == OcclusionSide::kBottom) oy += shift;
-      double covered = 0, total = 0;
-      for (double a : cover.v) total += a;
-      for (int y = 0; y < occluder_side; ++y)
-        for (int x = 0; x < occluder_side; ++x)
-          if (ox + x >= 0 && oy + y >= 0 && ox + x < frame.w && oy + y < frame.h) {
-            frame.at(ox + x, oy + y) = gain * brick.at((x + 200) % brick.w, (y + 100) % brick.h);
-            covered += cover.at(ox + x, oy + y);
-          }
-      hidden = total > 0 ? covered / total : 1;
-    }
+    if (const double travel = occluder_cover(f); travel > 0)
+      hidden = paint_occluder(frame, cover, brick, p, travel, occluder_side, o.occlusion_side, gain);
     const bool visible = hidden <= 0.25;
     app::GrayImage out(o.width, o.height);
     for (std::size_t i = 0; i < out.pixels.size(); ++i) {
