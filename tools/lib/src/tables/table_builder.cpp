@@ -46,16 +46,19 @@ void choose_offset_encoding(const std::vector<std::uint32_t>& offsets, tf::Layou
 
 }  // namespace
 
-Stencils compute_stencils(const ModelStack& model, const BuildOptions& options) {
-  if (model.depths.empty()) throw app::Error("model has no depth images");
-  if (model.depths.size() > tf::kMaxDepths) throw app::Error("too many focus-stack images");
-  Stencils out;
-  out.space = options.space;
-  out.space.depths = static_cast<std::uint16_t>(model.depths.size());
-  if (out.space.cell_count() > tf::kMaxCells) {
-    throw app::Error("state space has " + std::to_string(out.space.cell_count()) + " cells; the format allows " +
-                     std::to_string(tf::kMaxCells));
-  }
+namespace {
+
+// The ROI's reach beyond the format's window limit, as the error that says so.
+app::Error roi_too_far(double reach) {
+  return app::Error("the ROI reaches " + std::to_string(static_cast<long>(std::ceil(reach))) +
+                    " px from the reference point; a table may reach at most " + std::to_string((tf::kMaxRoiWindowSide - 1) / 2) +
+                    " px (the tracker's scratch grows with its square): put the reference point on the object (--ref) or "
+                    "narrow --x/--y");
+}
+
+// The model and the space against the format's limits, before anything
+// large is allocated (the exact ROI window is checked once the stencils are known).
+void check_limits(const ModelStack& model, const StateSpace& space, const BuildOptions& options) {
   std::size_t model_points = 0;
   for (const auto& d : model.depths) {
     if (d.empty()) throw app::Error("a focus-stack image has no feature points");
@@ -73,17 +76,10 @@ Stencils compute_stencils(const ModelStack& model, const BuildOptions& options) 
   std::int64_t model_reach2 = 0;
   for (const auto& d : model.depths)
     for (const Point& p : d) model_reach2 = std::max<std::int64_t>(model_reach2, std::int64_t{p.x} * p.x + std::int64_t{p.y} * p.y);
-  const double shift = std::max({std::fabs(out.space.x.min), std::fabs(out.space.x.max), std::fabs(out.space.y.min),
-                                 std::fabs(out.space.y.max)});
+  const double shift = std::max({std::fabs(space.x.min), std::fabs(space.x.max), std::fabs(space.y.min),
+                                 std::fabs(space.y.max)});
   const double reach_at_least = std::max(std::sqrt(static_cast<double>(model_reach2)), shift);
-  const auto too_far = [&](double reach) {
-    return app::Error("the ROI reaches " + std::to_string(static_cast<long>(std::ceil(reach))) +
-                      " px from the reference point; a table may reach at most " +
-                      std::to_string((tf::kMaxRoiWindowSide - 1) / 2) +
-                      " px (the tracker's scratch grows with its square): put the reference point on the object (--ref) or "
-                      "narrow --x/--y");
-  };
-  if (2.0 * std::ceil(reach_at_least) + 1.0 > tf::kMaxRoiWindowSide) throw too_far(reach_at_least);
+  if (2.0 * std::ceil(reach_at_least) + 1.0 > tf::kMaxRoiWindowSide) throw roi_too_far(reach_at_least);
   if (!(std::fabs(model.ref_x) <= tf::kMaxModelRef && std::fabs(model.ref_y) <= tf::kMaxModelRef)) {
     throw app::Error("the reference point must lie within +-" + std::to_string(static_cast<int>(tf::kMaxModelRef)) + " px");
   }
@@ -91,21 +87,24 @@ Stencils compute_stencils(const ModelStack& model, const BuildOptions& options) 
   // by the cell's centre), so a space that would exceed the reference limit
   // even so is refused now rather than after gigabytes of stencils.
   std::uint64_t at_least = 0;
-  const std::uint64_t cells_per_depth = out.space.cell_count() / out.space.depths;
+  const std::uint64_t cells_per_depth = space.cell_count() / space.depths;
   for (const auto& d : model.depths) at_least += cells_per_depth * (d.size() / 2);
   if (at_least > tf::kMaxReferences) {
-    throw app::Error("state space of " + std::to_string(out.space.cell_count()) + " cells x " + std::to_string(model_points) +
+    throw app::Error("state space of " + std::to_string(space.cell_count()) + " cells x " + std::to_string(model_points) +
                      " model points would exceed " + std::to_string(tf::kMaxReferences) + " references; use fewer or larger cells");
   }
   if (!(static_cast<float>(options.keep) > 0.0f)) throw app::Error("--keep is too small to store (below 1e-38)");
 
-  const std::uint32_t channels = options.orientation_channels;
+}
+
+// Each model point's edge orientation (orientation_256), per depth; empty
+// without orientation channels.
+std::vector<std::vector<std::uint8_t>> point_orientations(const ModelStack& model, std::uint32_t channels) {
   if (channels != 0 && !tf::valid_orientation_channels(channels)) throw app::Error("orientation channels: want 2, 4, 8 or 16");
   if (channels != 0 && model.images.size() != model.depths.size())
     throw app::Error("orientation channels need a model built from images (each point's orientation is the image's edge there)");
   if (channels != 0 && model.detector.kind == tf::DetectorKind::kBinary)
     throw app::Error("orientation channels need a gradient detector (--canny or --gradient), not --binary");
-  // Each model point's edge orientation (orientation_256), per depth.
   std::vector<std::vector<std::uint8_t>> orientation(model.depths.size());
   if (channels != 0) {
     for (std::size_t d = 0; d < model.depths.size(); ++d) {
@@ -115,13 +114,67 @@ Stencils compute_stencils(const ModelStack& model, const BuildOptions& options) 
                                                      round_to_int(model.ref_y + static_cast<float>(p.y))));
     }
   }
+  return orientation;
+}
+
+// With channels: per channel, the arcs of the points whose orientation,
+// turned by any angle of the cell's theta range, lies in that channel.
+std::vector<std::vector<Point>> channel_sweeps(const std::vector<Point>& points, const std::vector<std::uint8_t>& orientation,
+                                               const CellBounds& u, std::uint32_t channels) {
+  std::vector<std::vector<Point>> members(channels);
+  const double width = 256.0 / channels;  // orientation steps per channel
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const double lo = orientation[i] + u.theta_lo_deg * (256.0 / 180.0);
+    const double hi = orientation[i] + u.theta_hi_deg * (256.0 / 180.0);
+    const auto first = static_cast<std::int64_t>(std::floor(lo / width)), last = static_cast<std::int64_t>(std::floor(hi / width));
+    for (std::int64_t k = first; k <= last && k < first + channels; ++k)
+      members[static_cast<std::size_t>(((k % channels) + channels) % channels)].push_back(points[i]);
+  }
+  std::vector<std::vector<Point>> channel_arcs(channels);
+  for (std::uint32_t k = 0; k < channels; ++k)
+    if (!members[k].empty()) channel_arcs[k] = swept_arcs(members[k], u.theta_lo_deg, u.theta_hi_deg);
+  return channel_arcs;
+}
+
+// A cell's stencil with channels: its points in (x, y, channel) order.
+void channel_stencil(const std::vector<std::vector<Point>>& channel_arcs, const CellBounds& u, TranslationPolicy translations,
+                     std::vector<Point>& points, std::vector<std::uint8_t>& point_channels) {
+  std::vector<std::pair<Point, std::uint8_t>> all;
+  for (std::uint32_t k = 0; k < channel_arcs.size(); ++k) {
+    if (channel_arcs[k].empty()) continue;
+    for (const Point& p : translate_sweep(channel_arcs[k], u, translations)) all.push_back({p, static_cast<std::uint8_t>(k)});
+  }
+  std::sort(all.begin(), all.end(), [](const auto& a, const auto& b) {
+    return a.first.x != b.first.x ? a.first.x < b.first.x : a.first.y != b.first.y ? a.first.y < b.first.y : a.second < b.second;
+  });
+  points.clear();
+  point_channels.clear();
+  for (const auto& [p, k] : all) {
+    points.push_back(p);
+    point_channels.push_back(k);
+  }
+}
+
+}  // namespace
+
+Stencils compute_stencils(const ModelStack& model, const BuildOptions& options) {
+  if (model.depths.empty()) throw app::Error("model has no depth images");
+  if (model.depths.size() > tf::kMaxDepths) throw app::Error("too many focus-stack images");
+  Stencils out;
+  out.space = options.space;
+  out.space.depths = static_cast<std::uint16_t>(model.depths.size());
+  if (out.space.cell_count() > tf::kMaxCells) {
+    throw app::Error("state space has " + std::to_string(out.space.cell_count()) + " cells; the format allows " +
+                     std::to_string(tf::kMaxCells));
+  }
+  check_limits(model, out.space, options);
+  const std::uint32_t channels = options.orientation_channels;
+  const std::vector<std::vector<std::uint8_t>> orientation = point_orientations(model, channels);
   out.cells = out.space.cells();
   out.points.resize(out.cells.size());
   out.channel_count = channels == 0 ? 1u : channels;
   if (channels != 0) out.channels.resize(out.cells.size());
-  // With channels: per channel, the arcs of the points whose orientation,
-  // turned by any angle of the cell's theta range, lies in that channel.
-  std::vector<std::vector<Point>> channel_arcs;
+  std::vector<std::vector<Point>> channel_arcs;  // with channels: the current sweep's, per channel
   std::int64_t min_x = std::numeric_limits<std::int64_t>::max(), min_y = min_x;
   std::int64_t max_x = std::numeric_limits<std::int64_t>::min(), max_y = max_x;
   // The rotation sweep depends only on (depth, theta cell), shared by the
@@ -135,35 +188,8 @@ Stencils compute_stencils(const ModelStack& model, const BuildOptions& options) 
       if (new_sweep) arcs = swept_arcs(model.depths[u.depth], u.theta_lo_deg, u.theta_hi_deg);
       out.points[c] = translate_sweep(arcs, u, options.translations);
     } else {
-      if (new_sweep) {
-        std::vector<std::vector<Point>> members(channels);
-        const double width = 256.0 / channels;  // orientation steps per channel
-        for (std::size_t i = 0; i < model.depths[u.depth].size(); ++i) {
-          const double lo = orientation[u.depth][i] + u.theta_lo_deg * (256.0 / 180.0);
-          const double hi = orientation[u.depth][i] + u.theta_hi_deg * (256.0 / 180.0);
-          const auto first = static_cast<std::int64_t>(std::floor(lo / width)), last = static_cast<std::int64_t>(std::floor(hi / width));
-          for (std::int64_t k = first; k <= last && k < first + channels; ++k)
-            members[static_cast<std::size_t>(((k % channels) + channels) % channels)].push_back(model.depths[u.depth][i]);
-        }
-        channel_arcs.assign(channels, {});
-        for (std::uint32_t k = 0; k < channels; ++k)
-          if (!members[k].empty()) channel_arcs[k] = swept_arcs(members[k], u.theta_lo_deg, u.theta_hi_deg);
-      }
-      // Points in (x, y, channel) order.
-      std::vector<std::pair<Point, std::uint8_t>> all;
-      for (std::uint32_t k = 0; k < channels; ++k) {
-        if (channel_arcs[k].empty()) continue;
-        for (const Point& p : translate_sweep(channel_arcs[k], u, options.translations)) all.push_back({p, static_cast<std::uint8_t>(k)});
-      }
-      std::sort(all.begin(), all.end(), [](const auto& a, const auto& b) {
-        return a.first.x != b.first.x ? a.first.x < b.first.x : a.first.y != b.first.y ? a.first.y < b.first.y : a.second < b.second;
-      });
-      out.points[c].clear();
-      out.channels[c].clear();
-      for (const auto& [p, k] : all) {
-        out.points[c].push_back(p);
-        out.channels[c].push_back(k);
-      }
+      if (new_sweep) channel_arcs = channel_sweeps(model.depths[u.depth], orientation[u.depth], u, channels);
+      channel_stencil(channel_arcs, u, options.translations, out.points[c], out.channels[c]);
     }
     for (const Point& p : out.points[c]) {
       min_x = std::min<std::int64_t>(min_x, p.x);
@@ -182,7 +208,7 @@ Stencils compute_stencils(const ModelStack& model, const BuildOptions& options) 
   }
   const std::uint32_t window = tf::roi_window_side(static_cast<std::uint16_t>(roi_w), static_cast<std::uint16_t>(roi_h),
                                                    static_cast<std::int16_t>(min_x), static_cast<std::int16_t>(min_y));
-  if (window > tf::kMaxRoiWindowSide) throw too_far((window - 1) / 2.0);
+  if (window > tf::kMaxRoiWindowSide) throw roi_too_far((window - 1) / 2.0);
   out.roi_min_x = static_cast<std::int32_t>(min_x);
   out.roi_min_y = static_cast<std::int32_t>(min_y);
   out.roi_width = static_cast<std::uint16_t>(roi_w);
