@@ -256,6 +256,82 @@ CsrLists assemble_csr(Stencils& stencils, const BuildOptions& options) {
   return csr;
 }
 
+namespace {
+
+// The cell descriptors (docs/table-format.md), in cell index order.
+void write_cells(std::byte* at, const std::vector<CellBounds>& cells) {
+  namespace co = tf::cell_offset;
+  for (std::size_t c = 0; c < cells.size(); ++c) {
+    std::byte* d = at + c * tf::kCellDescriptorBytes;
+    store_le<float>(d + co::kXLo, cells[c].x_lo);
+    store_le<float>(d + co::kXHi, cells[c].x_hi);
+    store_le<float>(d + co::kYLo, cells[c].y_lo);
+    store_le<float>(d + co::kYHi, cells[c].y_hi);
+    store_le<float>(d + co::kThetaLo, cells[c].theta_lo_deg);
+    store_le<float>(d + co::kThetaHi, cells[c].theta_hi_deg);
+    store_le<std::uint16_t>(d + co::kDepth, cells[c].depth);
+    store_le<std::uint32_t>(d + co::kStencilSize, cells[c].stencil_size);
+  }
+}
+
+// The CSR offsets: wide (one u32 per slot, delta_bytes 0) or compact (per
+// 128-slot block: base, rank, mask; then each non-empty slot's end less its
+// block's base, in delta_bytes).
+void write_offsets(std::byte* at, const std::vector<std::uint32_t>& offsets, std::uint32_t pixels, std::uint8_t delta_bytes) {
+  if (delta_bytes == 0) {
+    for (std::uint32_t p = 0; p <= pixels; ++p) store_le<std::uint32_t>(at + std::size_t{p} * 4, offsets[p]);
+    return;
+  }
+  std::byte* blocks = at;
+  std::byte* deltas = blocks + std::size_t{tf::offset_block_count(pixels)} * tf::kOffsetBlockHeaderBytes;
+  std::uint32_t rank = 0;
+  for (std::uint32_t block = 0; block < tf::offset_block_count(pixels); ++block) {
+    const std::uint32_t first = block * tf::kOffsetBlockPixels, base = offsets[first];
+    std::uint64_t mask[2] = {0, 0};
+    const std::uint32_t block_rank = rank;
+    for (std::uint32_t p = first; p < std::min(pixels, first + tf::kOffsetBlockPixels); ++p) {
+      if (offsets[p + 1] == offsets[p]) continue;
+      mask[(p - first) / 64] |= std::uint64_t{1} << ((p - first) % 64);
+      const std::uint32_t end = offsets[p + 1] - base;
+      if (delta_bytes == 1) store_le<std::uint8_t>(deltas + rank, static_cast<std::uint8_t>(end));
+      else store_le<std::uint16_t>(deltas + std::size_t{rank} * 2, static_cast<std::uint16_t>(end));
+      ++rank;
+    }
+    std::byte* h = blocks + std::size_t{block} * tf::kOffsetBlockHeaderBytes;
+    store_le<std::uint32_t>(h, base);
+    store_le<std::uint32_t>(h + 4, block_rank);
+    store_le<std::uint64_t>(h + 8, mask[0]);
+    store_le<std::uint64_t>(h + 16, mask[1]);
+  }
+}
+
+// The reference lists' cells, each in ref_bytes.
+void write_references(std::byte* at, const std::vector<std::uint32_t>& cells, std::uint8_t ref_bytes) {
+  for (std::size_t r = 0; r < cells.size(); ++r) {
+    std::byte* d = at + r * ref_bytes;
+    switch (ref_bytes) {
+      case 1: store_le<std::uint8_t>(d, static_cast<std::uint8_t>(cells[r])); break;
+      case 2: store_le<std::uint16_t>(d, static_cast<std::uint16_t>(cells[r])); break;
+      default: store_le<std::uint32_t>(d, cells[r]); break;
+    }
+  }
+}
+
+// Per depth its point count, then every depth's points as int16 pairs.
+void write_model_points(std::byte* counts_at, std::byte* points_at, const ModelStack& model) {
+  std::size_t k = 0;
+  for (std::size_t d = 0; d < model.depths.size(); ++d) {
+    store_le<std::uint32_t>(counts_at + d * 4, static_cast<std::uint32_t>(model.depths[d].size()));
+    for (const Point& p : model.depths[d]) {
+      store_le<std::int16_t>(points_at + k * 4, static_cast<std::int16_t>(p.x));
+      store_le<std::int16_t>(points_at + k * 4 + 2, static_cast<std::int16_t>(p.y));
+      ++k;
+    }
+  }
+}
+
+}  // namespace
+
 std::vector<std::byte> serialise_table(const ModelStack& model, const BuildOptions& options, const Stencils& stencils,
                                        const CsrLists& csr) {
   const std::vector<CellBounds>& cells = stencils.cells;
@@ -334,61 +410,10 @@ std::vector<std::byte> serialise_table(const ModelStack& model, const BuildOptio
       std::memcpy(b + layout.model_images + d * model.images[d].size(), model.images[d].data(), model.images[d].size());
   }
 
-  namespace co = tf::cell_offset;
-  for (std::uint32_t c = 0; c < cell_count; ++c) {
-    std::byte* d = b + layout.cells + std::size_t{c} * tf::kCellDescriptorBytes;
-    store_le<float>(d + co::kXLo, cells[c].x_lo);
-    store_le<float>(d + co::kXHi, cells[c].x_hi);
-    store_le<float>(d + co::kYLo, cells[c].y_lo);
-    store_le<float>(d + co::kYHi, cells[c].y_hi);
-    store_le<float>(d + co::kThetaLo, cells[c].theta_lo_deg);
-    store_le<float>(d + co::kThetaHi, cells[c].theta_hi_deg);
-    store_le<std::uint16_t>(d + co::kDepth, cells[c].depth);
-    store_le<std::uint32_t>(d + co::kStencilSize, cells[c].stencil_size);
-  }
-  if (compact) {
-    // Per 128-pixel block: base, rank, mask; then each non-empty pixel's end less its block's base.
-    std::byte* blocks = b + layout.pixel_offsets;
-    std::byte* deltas = blocks + std::size_t{tf::offset_block_count(pixels)} * tf::kOffsetBlockHeaderBytes;
-    std::uint32_t rank = 0;
-    for (std::uint32_t block = 0; block < tf::offset_block_count(pixels); ++block) {
-      const std::uint32_t first = block * tf::kOffsetBlockPixels, base = csr.offsets[first];
-      std::uint64_t mask[2] = {0, 0};
-      const std::uint32_t block_rank = rank;
-      for (std::uint32_t p = first; p < std::min(pixels, first + tf::kOffsetBlockPixels); ++p) {
-        if (csr.offsets[p + 1] == csr.offsets[p]) continue;
-        mask[(p - first) / 64] |= std::uint64_t{1} << ((p - first) % 64);
-        const std::uint32_t end = csr.offsets[p + 1] - base;
-        if (counts.offset_delta_bytes == 1) store_le<std::uint8_t>(deltas + rank, static_cast<std::uint8_t>(end));
-        else store_le<std::uint16_t>(deltas + std::size_t{rank} * 2, static_cast<std::uint16_t>(end));
-        ++rank;
-      }
-      std::byte* h = blocks + std::size_t{block} * tf::kOffsetBlockHeaderBytes;
-      store_le<std::uint32_t>(h, base);
-      store_le<std::uint32_t>(h + 4, block_rank);
-      store_le<std::uint64_t>(h + 8, mask[0]);
-      store_le<std::uint64_t>(h + 16, mask[1]);
-    }
-  } else {
-    for (std::uint32_t p = 0; p <= pixels; ++p) store_le<std::uint32_t>(b + layout.pixel_offsets + std::size_t{p} * 4, csr.offsets[p]);
-  }
-  for (std::uint32_t r = 0; r < references; ++r) {
-    std::byte* d = b + layout.references + std::size_t{r} * ref_bytes;
-    switch (ref_bytes) {
-      case 1: store_le<std::uint8_t>(d, static_cast<std::uint8_t>(csr.cells[r])); break;
-      case 2: store_le<std::uint16_t>(d, static_cast<std::uint16_t>(csr.cells[r])); break;
-      default: store_le<std::uint32_t>(d, csr.cells[r]); break;
-    }
-  }
-  std::size_t k = 0;
-  for (std::size_t d = 0; d < model.depths.size(); ++d) {
-    store_le<std::uint32_t>(b + layout.model_counts + d * 4, static_cast<std::uint32_t>(model.depths[d].size()));
-    for (const Point& p : model.depths[d]) {
-      store_le<std::int16_t>(b + layout.model_points + k * 4, static_cast<std::int16_t>(p.x));
-      store_le<std::int16_t>(b + layout.model_points + k * 4 + 2, static_cast<std::int16_t>(p.y));
-      ++k;
-    }
-  }
+  write_cells(b + layout.cells, cells);
+  write_offsets(b + layout.pixel_offsets, csr.offsets, pixels, counts.offset_delta_bytes);
+  write_references(b + layout.references, csr.cells, ref_bytes);
+  write_model_points(b + layout.model_counts, b + layout.model_points, model);
   store_le<std::uint32_t>(b + off::kCrc32, table_checksum(out));
   return out;
 }
