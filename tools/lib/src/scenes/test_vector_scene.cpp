@@ -74,57 +74,16 @@ void walk(app::Rng& rng, float& x, float& y, float& theta, std::int32_t& depth, 
 
 }  // namespace
 
-VectorSceneSummary write_test_vectors(const VectorSceneOptions& o, const std::string& dir) {
-  if (o.model_points < 100 || o.model_points > 5000) throw app::Error("vectors: model points must be in 100..5000");
-  if (o.depths < 1 || o.depths > 16) throw app::Error("vectors: depths must be in 1..16");
-  if (o.frames < 1 || o.frames > 1000) throw app::Error("vectors: frames must be in 1..1000");
-  if (!(o.keep >= 0 && o.keep <= 1)) throw app::Error("vectors: keep must be in (0, 1]");
-  if (o.keep == 0 && o.table_budget_bytes == 0) throw app::Error("vectors: give a table budget or a keep ratio");
-  if (!(o.noise >= 0 && o.noise <= 1)) throw app::Error("vectors: noise must be in [0, 1]");
+namespace {
 
-  ModelStack model;
-  const std::vector<Point> base = nested_curves(o.model_points, o.seed);
-  for (std::uint16_t n = 0; n < o.depths; ++n) model.depths.push_back(at_depth(base, n));
-  model.detector.kind = table_format::DetectorKind::kBinary;
-
-  // +-7 px in 2-px cells, +-3 deg in 2-deg cells, every depth: per frame the
-  // object may move anywhere in that window.
-  BuildOptions build;
-  build.space.x = {-6.0f, 6.0f, 7};
-  build.space.y = {-6.0f, 6.0f, 7};
-  build.space.theta = {-2.0f, 2.0f, 3};
-  build.keep = o.keep;
-  build.seed = o.seed;
-  BudgetReport budget_report;
-  std::vector<std::byte> table_bytes;
-  if (o.keep > 0) {
-    table_bytes = build_table(model, build);
-    budget_report.keep = o.keep;
-  } else {
-    Budget budget;
-    budget.max_bytes = o.table_budget_bytes;
-    table_bytes = build_table_to_budget(model, build, budget, budget_report);
-  }
-  TableView table;
-  if (const Status s = TableView::open(table_bytes, table); s != Status::kOk) throw app::Error(std::string("vectors: built table invalid: ") + status_name(s));
-
-  std::int32_t extent = 0;
-  for (const auto& depth : model.depths)
-    for (const Point& p : depth) extent = std::max({extent, std::abs(p.x), std::abs(p.y)});
-  const std::uint32_t side = static_cast<std::uint32_t>(2 * (extent + 24) + 1);
-
-  // The true trajectory: integer steps within the table's cell centres'
-  // reach, angle steps of whole degrees, depth walking by one.
-  app::Rng rng(o.seed ^ 0x7EC7025ull);
-  float x = static_cast<float>(side / 2), y = static_cast<float>(side / 2), theta = 0;
-  std::int32_t depth = static_cast<std::int32_t>(o.depths / 2);
-  vectors::VectorSet set;
-  set.frame_count = o.frames;
-  set.width = side;
-  set.height = side;
-  set.detector = {table_format::DetectorKind::kBinary, 0};
-  set.init = {x, y, theta, static_cast<std::uint16_t>(depth)};
-
+// vectors.gbv: the frames of a random walk (from set.init) and the host's
+// closed-loop track_step record of each, as every target will replay them.
+std::vector<std::byte> step_vectors(const VectorSceneOptions& o, const ModelStack& model, const TableView& table,
+                                    const vectors::VectorSet& set, app::Rng& rng, app::TrackerBuffers& buffers,
+                                    VectorSceneSummary& summary) {
+  const std::uint32_t side = set.width;
+  float x = set.init.x, y = set.init.y, theta = set.init.theta_deg;
+  std::int32_t depth = set.init.depth;
   std::vector<std::byte> file(vectors::file_bytes(o.frames, side, side));
   std::vector<float> true_x, true_y, true_theta;
   std::vector<std::int32_t> true_depth;
@@ -140,8 +99,6 @@ VectorSceneSummary write_test_vectors(const VectorSceneOptions& o, const std::st
   }
 
   // The host's results, closed loop, as every target will replay them.
-  VectorSceneSummary summary;
-  app::TrackerBuffers buffers(table, app::VoterChoice::kCsr);
   Pose pose = set.init;
   const std::size_t records_at = vectors::kHeaderBytes + std::size_t{o.frames} * side * side;
   for (std::uint32_t f = 0; f < o.frames; ++f) {
@@ -161,6 +118,20 @@ VectorSceneSummary write_test_vectors(const VectorSceneOptions& o, const std::st
   const std::size_t body = file.size() - vectors::kTrailerBytes;
   store_le<std::uint32_t>(file.data() + body, crc32(std::span<const std::byte>(file.data(), body)));
 
+  return file;
+}
+
+// session.gbs (each recovery placement a full track_step) and, in
+// `screened_file`, session-screened.gbs (placements screened from shared
+// search features): the session's sequence, its focus stack (each depth's
+// model drawn centred in an image of its own) and the host's results.
+std::vector<std::byte> session_vectors(const VectorSceneOptions& o, const ModelStack& model, const TableView& table,
+                                       const vectors::VectorSet& set, std::int32_t extent, app::Rng& rng,
+                                       app::TrackerBuffers& buffers, VectorSceneSummary& summary,
+                                       std::vector<std::byte>& screened_file) {
+  const std::uint32_t side = set.width;
+  float x = 0, y = 0, theta = 0;
+  std::int32_t depth = 0;
   // The session's sequence and focus stack: each depth's model drawn
   // centred in an image of its own (the reference point at the centre).
   if (o.session_frames < 1 || o.session_frames > 1000) throw app::Error("vectors: session frames must be in 1..1000");
@@ -231,8 +202,69 @@ VectorSceneSummary write_test_vectors(const VectorSceneOptions& o, const std::st
     store_le<std::uint32_t>(out.data() + body, crc32(std::span<const std::byte>(out.data(), body)));
     return out;
   };
-  const std::vector<std::byte> screened_file = record(true);
-  session_file = record(false);  // its summary is the one reported
+  screened_file = record(true);
+  return record(false);  // its summary is the one reported
+
+}
+
+}  // namespace
+
+VectorSceneSummary write_test_vectors(const VectorSceneOptions& o, const std::string& dir) {
+  if (o.model_points < 100 || o.model_points > 5000) throw app::Error("vectors: model points must be in 100..5000");
+  if (o.depths < 1 || o.depths > 16) throw app::Error("vectors: depths must be in 1..16");
+  if (o.frames < 1 || o.frames > 1000) throw app::Error("vectors: frames must be in 1..1000");
+  if (!(o.keep >= 0 && o.keep <= 1)) throw app::Error("vectors: keep must be in (0, 1]");
+  if (o.keep == 0 && o.table_budget_bytes == 0) throw app::Error("vectors: give a table budget or a keep ratio");
+  if (!(o.noise >= 0 && o.noise <= 1)) throw app::Error("vectors: noise must be in [0, 1]");
+
+  ModelStack model;
+  const std::vector<Point> base = nested_curves(o.model_points, o.seed);
+  for (std::uint16_t n = 0; n < o.depths; ++n) model.depths.push_back(at_depth(base, n));
+  model.detector.kind = table_format::DetectorKind::kBinary;
+
+  // +-7 px in 2-px cells, +-3 deg in 2-deg cells, every depth: per frame the
+  // object may move anywhere in that window.
+  BuildOptions build;
+  build.space.x = {-6.0f, 6.0f, 7};
+  build.space.y = {-6.0f, 6.0f, 7};
+  build.space.theta = {-2.0f, 2.0f, 3};
+  build.keep = o.keep;
+  build.seed = o.seed;
+  BudgetReport budget_report;
+  std::vector<std::byte> table_bytes;
+  if (o.keep > 0) {
+    table_bytes = build_table(model, build);
+    budget_report.keep = o.keep;
+  } else {
+    Budget budget;
+    budget.max_bytes = o.table_budget_bytes;
+    table_bytes = build_table_to_budget(model, build, budget, budget_report);
+  }
+  TableView table;
+  if (const Status s = TableView::open(table_bytes, table); s != Status::kOk) throw app::Error(std::string("vectors: built table invalid: ") + status_name(s));
+
+  std::int32_t extent = 0;
+  for (const auto& depth : model.depths)
+    for (const Point& p : depth) extent = std::max({extent, std::abs(p.x), std::abs(p.y)});
+  const std::uint32_t side = static_cast<std::uint32_t>(2 * (extent + 24) + 1);
+
+  // The true trajectory: integer steps within the table's cell centres'
+  // reach, angle steps of whole degrees, depth walking by one.
+  app::Rng rng(o.seed ^ 0x7EC7025ull);
+  float x = static_cast<float>(side / 2), y = static_cast<float>(side / 2), theta = 0;
+  std::int32_t depth = static_cast<std::int32_t>(o.depths / 2);
+  VectorSceneSummary summary;
+  app::TrackerBuffers buffers(table, app::VoterChoice::kCsr);
+  vectors::VectorSet set;
+  set.frame_count = o.frames;
+  set.width = side;
+  set.height = side;
+  set.detector = {table_format::DetectorKind::kBinary, 0};
+  set.init = {x, y, theta, static_cast<std::uint16_t>(depth)};
+
+  std::vector<std::byte> file = step_vectors(o, model, table, set, rng, buffers, summary);
+  std::vector<std::byte> screened_file;
+  std::vector<std::byte> session_file = session_vectors(o, model, table, set, extent, rng, buffers, summary, screened_file);
 
   std::filesystem::create_directories(dir);
   app::write_file((std::filesystem::path(dir) / "table.gbt").string(), table_bytes);
