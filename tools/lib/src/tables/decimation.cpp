@@ -104,6 +104,42 @@ class GreedyDraw {
   std::uint64_t live_ = 0;
 };
 
+// The rival of stencil `c` (its pixels S): the other full stencil sharing
+// most pixels with S (lowest index on ties). With `mark`, rival[i] says
+// whether S[i] is one of the rival's pixels; with `weigh`, rival_w[i] is
+// 1 + the sum over the other full stencils holding S[i] of
+// (256 |S n S'| / |S|)^2 / 256: a pixel weighs by how alike the stencils that
+// share it are to S. `shared` (one per cell, all zero) is scratch, left zero.
+void mark_rival(const std::vector<std::uint32_t>& S, std::size_t c, const std::vector<std::uint32_t>& first,
+                const std::vector<std::uint32_t>& cells_of, bool mark, bool weigh, std::vector<std::uint32_t>& shared,
+                std::vector<std::uint64_t>& rival_w, std::vector<std::uint8_t>& rival) {
+  const std::size_t n = S.size();
+  for (std::uint32_t px : S)
+    for (std::uint32_t k = first[px]; k < first[px + 1]; ++k) ++shared[cells_of[k]];
+  shared[c] = 0;
+  if (weigh) {
+    rival_w.assign(n, 1);
+    for (std::size_t i = 0; i < n; ++i) {
+      for (std::uint32_t k = first[S[i]]; k < first[S[i] + 1]; ++k) {
+        const std::uint64_t sim = std::uint64_t{shared[cells_of[k]]} * 256 / n;
+        rival_w[i] += sim * sim / 256;
+      }
+    }
+  }
+  std::size_t best = c;
+  for (std::size_t o = 0; o < shared.size(); ++o) {
+    if (shared[o] > (best == c ? 0 : shared[best])) best = o;
+  }
+  for (std::uint32_t px : S)
+    for (std::uint32_t k = first[px]; k < first[px + 1]; ++k) shared[cells_of[k]] = 0;
+  if (best != c && mark) {
+    for (std::size_t i = 0; i < n; ++i) {
+      const std::uint32_t px = S[i];
+      rival[i] = std::binary_search(cells_of.begin() + first[px], cells_of.begin() + first[px + 1], static_cast<std::uint32_t>(best));
+    }
+  }
+}
+
 std::vector<bool> decimate_per_stencil(const StencilPixels& s, double keep, std::uint64_t seed, const DecimationPolicy& p) {
   const std::uint32_t pixels = s.roi_width * s.roi_height;
   const std::size_t cell_count = s.cells.size();
@@ -143,38 +179,8 @@ std::vector<bool> decimate_per_stencil(const StencilPixels& s, double keep, std:
     if (target >= n) continue;
     if (p.spread && n > kMaxSpreadStencil) throw app::Error("decimation: a stencil too large for --spread");
 
-    // The rival: the other full stencil sharing most pixels with S (lowest index on ties).
     rival.assign(n, 1);
-    if (p.most_overlapping || rival_weight) {
-      for (std::uint32_t px : S)
-        for (std::uint32_t k = first[px]; k < first[px + 1]; ++k) ++shared[cells_of[k]];
-      shared[c] = 0;
-      if (rival_weight) {
-        // 1 + sum over the other full stencils holding the pixel of
-        // (256 |S n S'| / |S|)^2 / 256: a pixel weighs by how alike the
-        // stencils that share it are to S.
-        rival_w.assign(n, 1);
-        for (std::size_t i = 0; i < n; ++i) {
-          for (std::uint32_t k = first[S[i]]; k < first[S[i] + 1]; ++k) {
-            const std::uint64_t sim = std::uint64_t{shared[cells_of[k]]} * 256 / n;
-            rival_w[i] += sim * sim / 256;
-          }
-        }
-      }
-      std::size_t best = c;
-      for (std::size_t o = 0; o < cell_count; ++o) {
-        if (shared[o] > (best == c ? 0 : shared[best])) best = o;
-      }
-      for (std::uint32_t px : S)
-        for (std::uint32_t k = first[px]; k < first[px + 1]; ++k) shared[cells_of[k]] = 0;
-      if (best != c && p.most_overlapping) {
-        for (std::size_t i = 0; i < n; ++i) {
-          const std::uint32_t px = S[i];
-          rival[i] = std::binary_search(cells_of.begin() + first[px], cells_of.begin() + first[px + 1],
-                                        static_cast<std::uint32_t>(best));
-        }
-      }
-    }
+    if (p.most_overlapping || rival_weight) mark_rival(S, c, first, cells_of, p.most_overlapping, rival_weight, shared, rival_w, rival);
     near.assign(n, 0);
     alive.assign(n, 1);
     // Calls f(j) for every item j of S within kSpreadRadius of item i.
