@@ -120,7 +120,7 @@ std::string fault_timeline(const RunResult& result) {
   const double width = 720, left = 90, right = 20, row = 22, top = 30;
   const double n = std::max<double>(1, result.frames_total);
   std::ostringstream s;
-  s << "<app::svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" << width << "\" height=\"" << top + row * 6 + 30
+  s << "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" << width << "\" height=\"" << top + row * 6 + 30
     << "\" font-family=\"sans-serif\" font-size=\"11\">\n<text x=\"" << width / 2
     << "\" y=\"16\" text-anchor=\"middle\" font-size=\"13\">Injected faults by frame (green: detected and recovered)</text>\n";
   for (int k = 0; k < 6; ++k) {

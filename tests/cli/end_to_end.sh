@@ -311,6 +311,10 @@ $g tables analyse "$work/compact.gbt" --plots "$work/plots" -o "$work/analysis.j
 grep -q '"overall_margin": [0-9]' "$work/analysis.json" || fail "no overall_margin in the analysis"
 grep -q '"margins_exact": true' "$work/analysis.json" || fail "1-pixel translation cells not marked exact"
 [ -s "$work/plots/overlap_map.svg" ] && [ -s "$work/plots/margins.svg" ] || fail "analysis plots missing"
+for svg in "$work"/plots/*.svg; do
+  python3 -c 'import sys, xml.etree.ElementTree as ET; sys.exit(0 if ET.parse(sys.argv[1]).getroot().tag.endswith("svg") else 1)' "$svg" \
+    || fail "$svg is not a well-formed SVG document"
+done
 expect 2 "give exactly one TABLE" $g tables analyse "$work/compact.gbt" "$work/wide.gbt"
 # Budgets: the table fits, and the report says what was reached.
 half_kept=$(stat -c %s "$work/a.gbt")  # keep 0.5

@@ -88,6 +88,11 @@ for f in ("frames.csv", "poses.csv", "results.jsonl", "faults.csv", "report.md",
         open(f"{report}/{f}").close()
     except OSError:
         problems.append(f"{f} missing")
+for f in ("latency.svg", "faults.svg"):  # well-formed SVG documents
+    try:
+        need(ET.parse(f"{report}/{f}").getroot().tag.endswith("svg"), f"{f}: the root element is not svg")
+    except (ET.ParseError, OSError) as e:
+        problems.append(f"{f}: not well-formed XML ({e})")
 lines = open(f"{report}/results.jsonl").read().splitlines()
 need(len(lines) == s["frames"], f"results.jsonl has {len(lines)} lines for {s['frames']} frames")
 print(f"hil {s['dut']['kind']} {scenario}: {s['frames']} frames, {s['poses']} poses, {len(s['faults'])} faults; "

@@ -159,41 +159,9 @@ std::vector<TimingRow> time_methods(const Shape& shape, std::size_t frames, int 
   return rows;
 }
 
-int run(const Options& o) {
-  const auto started = Clock::now();
-  std::vector<Shape> shapes = {make_shape("curve", host::thesis_curve()), make_shape("watch", host::watch_shape())};
-
-  if (!o.regression_csv.empty()) {
-    auto spec = regression_grid_spec();
-    spec.threads = o.threads;
-    std::ofstream f(o.regression_csv);
-    f << "shape,noise,keep,frames,wrong\n";
-    for (const GridRow& r : run_grid(shapes, spec)) f << r.shape << ',' << r.noise << ',' << r.keep << ',' << r.frames << ',' << r.wrong << '\n';
-    std::cerr << "wrote " << o.regression_csv << "\n";
-    return 0;
-  }
-
-  std::filesystem::create_directories(o.out);
-  const std::size_t timing_frames = o.timing_frames ? o.timing_frames : (o.quick ? 40 : 300);
-  const int reps = o.quick ? 2 : 3;
-  const std::size_t grid_frames = o.grid_frames ? o.grid_frames : (o.quick ? 25 : 300);
-  std::vector<double> noises, keeps;
-  if (o.quick) {
-    noises = {0, 0.1, 0.2, 0.3, 0.4, 0.44, 0.46, 0.48, 0.5};
-    keeps = {1, 0.5, 0.1, 0.01};
-  } else {
-    for (int n = 0; n <= 50; n += 2) noises.push_back(n / 100.0);
-    keeps = {1, 0.5, 0.2, 0.1, 0.05, 0.02, 0.01};
-  }
-
-  // 1. Table 6.1, single-threaded (OpenCV too, so the ratio compares like with like).
-  cv::setNumThreads(1);
-  std::vector<TimingRow> timing;
-  for (const Shape& s : shapes) {
-    std::cerr << "timing " << s.name << " (" << s.points.size() << " points, " << timing_frames << " frames x " << reps << ")\n";
-    time_methods(s, timing_frames, reps, timing);
-  }
-  // OpenCV with its default thread pool, for the record.
+// OpenCV's TM_CCOEFF_NORMED with its default thread pool, for the record:
+// the best of `reps` per shape, microseconds per frame.
+std::map<std::string, double> opencv_threaded(const std::vector<Shape>& shapes, std::size_t timing_frames, int reps) {
   cv::setNumThreads(-1);
   std::map<std::string, double> cv_threaded;
   for (const Shape& s : shapes) {
@@ -209,26 +177,24 @@ int run(const Options& o) {
   }
   cv::setNumThreads(1);
 
-  // 2. The wrong-frame grid.
-  GridSpec spec;
-  spec.noises = noises;
-  spec.keeps = keeps;
-  spec.frames = grid_frames;
-  spec.threads = o.threads;
-  const bool tty = isatty(STDERR_FILENO);
-  spec.progress = [&](std::size_t done, std::size_t total) {
-    if (tty) std::fprintf(stderr, "\rgrid: %zu/%zu shape x noise jobs", done, total);
-    else if (done == total || done % 10 == 0) std::fprintf(stderr, "grid: %zu/%zu shape x noise jobs\n", done, total);
-    if (tty && done == total) std::fputc('\n', stderr);
-  };
-  const auto grid = run_grid(shapes, spec);
+  return cv_threaded;
+}
 
-  // 3. Stencil statistics.
+// Figs. 6.20, 6.26/6.27: each shape's table at each keep ratio, its
+// references per ROI pixel and its stencils' robustness.
+struct StencilStatistics {
   std::ostringstream hist_csv, robust_csv;
-  hist_csv << "shape,keep,refs_per_pixel,pixels\n";
-  robust_csv << "shape,keep,references,mean_margin,min_margin\n";
   std::map<std::string, std::vector<app::svg::Series>> hist_series, robust_series;
   std::map<std::string, std::vector<std::string>> robust_rows;
+};
+void stencil_statistics(const std::vector<Shape>& shapes, const std::vector<double>& keeps, StencilStatistics& st) {
+  std::ostringstream& hist_csv = st.hist_csv;
+  std::ostringstream& robust_csv = st.robust_csv;
+  auto& hist_series = st.hist_series;
+  auto& robust_series = st.robust_series;
+  auto& robust_rows = st.robust_rows;
+  hist_csv << "shape,keep,refs_per_pixel,pixels\n";
+  robust_csv << "shape,keep,references,mean_margin,min_margin\n";
   for (const Shape& s : shapes) {
     app::svg::Series mean{"mean", {}, {}}, min{"minimum", {}, {}};
     for (double keep : keeps) {
@@ -254,8 +220,12 @@ int run(const Options& o) {
     robust_series[s.name] = {mean, min};
   }
 
-  // Outputs.
-  {
+}
+
+// timing.csv, grid.csv, refs_per_pixel.csv, robustness.csv.
+void write_bench_csvs(const Options& o, const std::vector<TimingRow>& timing, const std::vector<GridRow>& grid,
+                      const StencilStatistics& st) {
+  const std::string hist_csv = st.hist_csv.str(), robust_csv = st.robust_csv.str();
     std::ofstream f(o.out + "/timing.csv");
     f << "shape,method,per_frame_us,speedup_vs_a,wrong_frames,frames\n";
     for (const TimingRow& r : timing) {
@@ -265,10 +235,12 @@ int run(const Options& o) {
     std::ofstream g(o.out + "/grid.csv");
     g << "shape,noise,keep,frames,wrong\n";
     for (const GridRow& r : grid) g << r.shape << ',' << r.noise << ',' << r.keep << ',' << r.frames << ',' << r.wrong << '\n';
-    std::ofstream(o.out + "/refs_per_pixel.csv") << hist_csv.str();
-    std::ofstream(o.out + "/robustness.csv") << robust_csv.str();
-  }
-  std::ostringstream md;
+    std::ofstream(o.out + "/refs_per_pixel.csv") << hist_csv;
+    std::ofstream(o.out + "/robustness.csv") << robust_csv;
+}
+
+// The report's opening: when, where, how, the protocol.
+void report_header(const Options& o, const std::vector<Shape>& shapes, std::ostringstream& md) {
   struct utsname un {};
   uname(&un);
   const std::time_t now = std::time(nullptr);
@@ -286,6 +258,11 @@ int run(const Options& o) {
      << shapes[0].points.size() << " points, hand-drawn-like closed curve) and `watch` (" << shapes[1].points.size()
      << " edge points of python3-skimage's coffee.png, 2×2-averaged).\n\n";
 
+}
+
+// Table 6.1 re-measured, with a bar plot per shape.
+void report_timing(const Options& o, const std::vector<Shape>& shapes, const std::vector<TimingRow>& timing,
+                   std::map<std::string, double>& cv_threaded, std::ostringstream& md) {
   md << "## Table 6.1 re-measured: time per frame at 20% noise\n\n";
   for (const Shape& s : shapes) {
     md << "### " << s.name << " (" << s.points.size() << " points)\n\n| method | µs/frame | speed-up vs (a) | wrong frames |\n|---|---:|---:|---:|\n";
@@ -312,6 +289,11 @@ int run(const Options& o) {
                                                              "microseconds per frame", labels, values));
   }
 
+}
+
+// Figs. 6.16-6.19 re-measured: the wrong-frame grid, with a heat map per shape.
+void report_grid(const Options& o, const std::vector<Shape>& shapes, const std::vector<double>& noises, const std::vector<double>& keeps,
+                 const std::vector<GridRow>& grid, std::size_t grid_frames, std::ostringstream& md) {
   md << "## Figs. 6.16–6.19 re-measured: wrong frames (out of " << grid_frames << ") over noise × references kept\n\n";
   for (const Shape& s : shapes) {
     std::vector<std::string> xl, yl;
@@ -349,6 +331,13 @@ int run(const Options& o) {
                             "salt-and-pepper noise", yl, values, static_cast<double>(grid_frames)));
   }
 
+}
+
+// Figs. 6.20, 6.26/6.27: references per pixel and robustness, with their plots.
+void report_stencils(const Options& o, const std::vector<Shape>& shapes, StencilStatistics& st, std::ostringstream& md) {
+  auto& hist_series = st.hist_series;
+  auto& robust_series = st.robust_series;
+  auto& robust_rows = st.robust_rows;
   md << "## Fig. 6.20: references per ROI pixel\n\n";
   for (const Shape& s : shapes) {
     md << "![refs per pixel " << s.name << "](refs_per_pixel_" << s.name << ".svg)\n\n";
@@ -364,6 +353,68 @@ int run(const Options& o) {
     app::svg::write(o.out + "/robustness_" + s.name + ".svg",
                app::svg::lines("Stencil robustness indicators, " + s.name, "fraction of references kept", "pixels", robust_series[s.name], true, false));
   }
+}
+
+int run(const Options& o) {
+  const auto started = Clock::now();
+  std::vector<Shape> shapes = {make_shape("curve", host::thesis_curve()), make_shape("watch", host::watch_shape())};
+
+  if (!o.regression_csv.empty()) {
+    auto spec = regression_grid_spec();
+    spec.threads = o.threads;
+    std::ofstream f(o.regression_csv);
+    f << "shape,noise,keep,frames,wrong\n";
+    for (const GridRow& r : run_grid(shapes, spec)) f << r.shape << ',' << r.noise << ',' << r.keep << ',' << r.frames << ',' << r.wrong << '\n';
+    std::cerr << "wrote " << o.regression_csv << "\n";
+    return 0;
+  }
+
+  std::filesystem::create_directories(o.out);
+  const std::size_t timing_frames = o.timing_frames ? o.timing_frames : (o.quick ? 40 : 300);
+  const int reps = o.quick ? 2 : 3;
+  const std::size_t grid_frames = o.grid_frames ? o.grid_frames : (o.quick ? 25 : 300);
+  std::vector<double> noises, keeps;
+  if (o.quick) {
+    noises = {0, 0.1, 0.2, 0.3, 0.4, 0.44, 0.46, 0.48, 0.5};
+    keeps = {1, 0.5, 0.1, 0.01};
+  } else {
+    for (int n = 0; n <= 50; n += 2) noises.push_back(n / 100.0);
+    keeps = {1, 0.5, 0.2, 0.1, 0.05, 0.02, 0.01};
+  }
+
+  // 1. Table 6.1, single-threaded (OpenCV too, so the ratio compares like with like).
+  cv::setNumThreads(1);
+  std::vector<TimingRow> timing;
+  for (const Shape& s : shapes) {
+    std::cerr << "timing " << s.name << " (" << s.points.size() << " points, " << timing_frames << " frames x " << reps << ")\n";
+    time_methods(s, timing_frames, reps, timing);
+  }
+  std::map<std::string, double> cv_threaded = opencv_threaded(shapes, timing_frames, reps);  // back to 1 thread after
+
+  // 2. The wrong-frame grid.
+  GridSpec spec;
+  spec.noises = noises;
+  spec.keeps = keeps;
+  spec.frames = grid_frames;
+  spec.threads = o.threads;
+  const bool tty = isatty(STDERR_FILENO);
+  spec.progress = [&](std::size_t done, std::size_t total) {
+    if (tty) std::fprintf(stderr, "\rgrid: %zu/%zu shape x noise jobs", done, total);
+    else if (done == total || done % 10 == 0) std::fprintf(stderr, "grid: %zu/%zu shape x noise jobs\n", done, total);
+    if (tty && done == total) std::fputc('\n', stderr);
+  };
+  const auto grid = run_grid(shapes, spec);
+
+  // 3. Stencil statistics.
+  StencilStatistics stats;
+  stencil_statistics(shapes, keeps, stats);
+
+  write_bench_csvs(o, timing, grid, stats);
+  std::ostringstream md;
+  report_header(o, shapes, md);
+  report_timing(o, shapes, timing, cv_threaded, md);
+  report_grid(o, shapes, noises, keeps, grid, grid_frames, md);
+  report_stencils(o, shapes, stats, md);
   const double seconds = std::chrono::duration<double>(Clock::now() - started).count();
   md << "---\nWhole bench: " << fmt(seconds) << " s. Files: timing.csv, grid.csv, refs_per_pixel.csv, robustness.csv, *.svg.\n";
   std::ofstream(o.out + "/report.md") << md.str();

@@ -322,6 +322,140 @@ std::vector<ReductionRow> compare_reduction(const std::vector<StudyShape>& shape
 
 }  // namespace
 
+namespace {
+
+// Per policy and half: the sum of the one-step wrong frames over the grid
+// (keep < 1), and the continuous sequences passed.
+void report_policy_summary(const std::vector<StudyShape>& shapes, const std::vector<NamedPolicy>& policies,
+                           const std::vector<GridRow>& grid, const std::vector<SequenceRow>& seq, std::ostringstream& md) {
+  md << "## Summary per policy (keep < 100%)\n\n"
+     << "| policy | one-step wrong, tuning | one-step wrong, held out | sequences all exact, tuning | sequences all exact, held out |\n"
+     << "|---|---:|---:|---:|---:|\n";
+  for (const auto& p : policies) {
+    const std::string name = host::describe(p.policy);
+    std::size_t wrong[2] = {0, 0}, passed[2] = {0, 0}, total[2] = {0, 0};
+    for (const GridRow& r : grid) {
+      if (r.policy != name || r.keep == 1.0) continue;
+      const bool held = std::find_if(shapes.begin(), shapes.end(), [&](const StudyShape& s) { return s.shape.name == r.shape; })->held_out;
+      wrong[held] += r.wrong;
+    }
+    for (const SequenceRow& r : seq) {
+      if (r.policy != p.name || r.keep == 1.0) continue;
+      const bool held = std::find_if(shapes.begin(), shapes.end(), [&](const StudyShape& s) { return s.shape.name == r.shape; })->held_out;
+      passed[held] += r.exact == r.frames;
+      ++total[held];
+    }
+    md << "| " << p.name << " | " << wrong[0] << " | " << wrong[1] << " | " << passed[0] << "/" << total[0] << " | " << passed[1] << "/"
+       << total[1] << " |\n";
+  }
+
+}
+
+// One shape: the highest noise every sequence frame is exact up to, and the
+// one-step trials', per policy and keep; the default policy's bytes and
+// time per keep; its heat maps.
+void report_shape(const DecimationStudyOptions& o, const StudyShape& s, const std::vector<NamedPolicy>& policies,
+                  const std::vector<double>& noises, const std::vector<double>& keeps, const std::vector<GridRow>& grid,
+                  const std::vector<SequenceRow>& seq, const GridSpec& spec, std::ostringstream& md) {
+  md << "\n## `" << s.shape.name << "`: continuous sequences (" << s.sequence_frames
+     << " frames), highest noise with every frame exact\n\n| policy |";
+  for (double k : keeps) md << ' ' << keep_label(k) << " |";
+  md << "\n|---|";
+  for (std::size_t i = 0; i < keeps.size(); ++i) md << "---:|";
+  md << '\n';
+  for (const auto& p : policies) {
+    md << "| " << p.name << " |";
+    for (double k : keeps) {
+      std::vector<SequenceRow> rows;
+      for (const auto& r : seq)
+        if (r.shape == s.shape.name && r.policy == p.name && r.keep == k) rows.push_back(r);
+      md << ' ' << reached_text(noise_reached(rows, noises, [](const SequenceRow& r) { return r.exact == r.frames; })) << " |";
+    }
+    md << '\n';
+  }
+  md << "\nOne-step trials (" << spec.frames << " per point), highest noise with no wrong frame:\n\n| policy |";
+  for (double k : keeps) md << ' ' << keep_label(k) << " |";
+  md << "\n|---|";
+  for (std::size_t i = 0; i < keeps.size(); ++i) md << "---:|";
+  md << '\n';
+  for (const auto& p : policies) {
+    md << "| " << p.name << " |";
+    const std::string name = host::describe(p.policy);
+    for (double k : keeps) {
+      std::vector<GridRow> rows;
+      for (const auto& r : grid)
+        if (r.shape == s.shape.name && r.policy == name && r.keep == k) rows.push_back(r);
+      md << ' ' << reached_text(noise_reached(rows, noises, [](const GridRow& r) { return r.wrong == 0; })) << " |";
+    }
+    md << '\n';
+  }
+  // Bytes and time per keep for the default policy (the sequences' mean µs per frame, all noise levels).
+  md << "\nThe default policy (`" << host::describe(host::DecimationPolicy{}) << "`): table bytes and mean µs per frame over the sequences\n\n"
+     << "| keep | table bytes | of full | µs/frame | speed-up |\n|---:|---:|---:|---:|---:|\n";
+  double full_us = 0;
+  std::size_t full_bytes = 0;
+  for (double k : keeps) {
+    double us = 0;
+    std::size_t bytes = 0, count = 0;
+    for (const auto& r : seq)
+      if (r.shape == s.shape.name && r.policy == "stencil" && r.keep == k) us += r.mean_us, bytes = r.table_bytes, ++count;
+    us /= std::max<std::size_t>(1, count);
+    if (k == 1.0) full_us = us, full_bytes = bytes;
+    char line[160];
+    std::snprintf(line, sizeof line, "| %s | %zu | %.1f%% | %.1f | %.2fx |\n", keep_label(k).c_str(), bytes,
+                  100.0 * static_cast<double>(bytes) / static_cast<double>(std::max<std::size_t>(1, full_bytes)), us, full_us / us);
+    md << line;
+  }
+
+  // Heat maps: wrong frames of the default policy's sequences, and time.
+  std::vector<std::string> xl, yl;
+  for (double k : keeps) xl.push_back(keep_label(k));
+  for (double n : noises) yl.push_back(percent(n));
+  std::vector<std::vector<double>> wrong(noises.size(), std::vector<double>(keeps.size(), 0)), time = wrong;
+  for (const auto& r : seq) {
+    if (r.shape != s.shape.name || r.policy != "stencil") continue;
+    const auto ni = static_cast<std::size_t>(std::find(noises.begin(), noises.end(), r.noise) - noises.begin());
+    const auto ki = static_cast<std::size_t>(std::find(keeps.begin(), keeps.end(), r.keep) - keeps.begin());
+    wrong[ni][ki] = static_cast<double>(r.frames - r.exact);
+    time[ni][ki] = r.mean_us;
+  }
+  double max_time = 0;
+  for (const auto& row : time) max_time = std::max(max_time, *std::max_element(row.begin(), row.end()));
+  app::svg::write(o.out + "/decimation_wrong_" + s.shape.name + ".svg",
+             app::svg::heatmap(s.shape.name + ": wrong frames of " + std::to_string(s.sequence_frames) + " (default policy)", "references kept",
+                          xl, "noise", yl, wrong, static_cast<double>(s.sequence_frames)));
+  app::svg::write(o.out + "/decimation_time_" + s.shape.name + ".svg",
+             app::svg::heatmap(s.shape.name + ": us per frame (default policy)", "references kept", xl, "noise", yl, time, max_time));
+  md << "\n![wrong frames](decimation_wrong_" << s.shape.name << ".svg) ![time](decimation_time_" << s.shape.name << ".svg)\n";
+}
+
+// Voting time per keep ratio, one run, single thread (the thesis's decimation gain).
+void report_voting_time(const DecimationStudyOptions& o, const std::vector<StudyShape>& shapes, const std::vector<double>& keeps,
+                        std::ostringstream& md) {
+  md << "\n## Voting time per frame (features extracted beforehand; 20% noise, one-step trials, best of 3)\n\n"
+     << "The voter the cost model picks (`auto`, dense_voter.hpp's dense_voter_pays_off) is marked.\n\n"
+     << "| shape, cells | keep | table bytes | refs per feature | CSR µs | dense µs | auto µs (choice) | auto vs full |\n"
+     << "|---|---:|---:|---:|---:|---:|---:|---:|\n";
+  struct Space {
+    std::size_t shape;
+    std::string theta, label;
+  };
+  const std::vector<Space> spaces = {{0, "0:0:1", "curve, 121"}, {1, "0:0:1", "watch, 121"}, {0, "-1:1:3", "curve, 363"},
+                                     {0, "-2:2:5", "curve, 605"}, {0, "-3:3:7", "curve, 847"}};
+  for (const Space& sp : spaces) {
+    const std::vector<VoteTiming> vt = time_voting(shapes[sp.shape].shape, keeps, o.quick ? 30 : 200, sp.theta);
+    for (const VoteTiming& v : vt) {
+      char line[256];
+      std::snprintf(line, sizeof line, "| %s | %s | %zu | %.2f | %.2f | %.2f | %.2f (%s) | %.2fx |\n", sp.label.c_str(),
+                    keep_label(v.keep).c_str(), v.bytes, v.refs_per_feature, v.csr_us, v.dense_us, v.auto_us,
+                    v.auto_dense ? "dense" : "CSR", vt.front().auto_us / v.auto_us);
+      md << line;
+    }
+  }
+}
+
+}  // namespace
+
 int run_decimation_study(const DecimationStudyOptions& o) {
   std::filesystem::create_directories(o.out);
   const std::vector<StudyShape> shapes = study_shapes(o.quick);
@@ -372,123 +506,10 @@ int run_decimation_study(const DecimationStudyOptions& o) {
   for (double k : keeps) md << keep_label(k) << ' ';
   md << "\n\n";
 
-  // Per policy and half: the sum of the one-step wrong frames over the grid
-  // (keep < 1), and the continuous sequences passed.
-  md << "## Summary per policy (keep < 100%)\n\n"
-     << "| policy | one-step wrong, tuning | one-step wrong, held out | sequences all exact, tuning | sequences all exact, held out |\n"
-     << "|---|---:|---:|---:|---:|\n";
-  for (const auto& p : policies) {
-    const std::string name = host::describe(p.policy);
-    std::size_t wrong[2] = {0, 0}, passed[2] = {0, 0}, total[2] = {0, 0};
-    for (const GridRow& r : grid) {
-      if (r.policy != name || r.keep == 1.0) continue;
-      const bool held = std::find_if(shapes.begin(), shapes.end(), [&](const StudyShape& s) { return s.shape.name == r.shape; })->held_out;
-      wrong[held] += r.wrong;
-    }
-    for (const SequenceRow& r : seq) {
-      if (r.policy != p.name || r.keep == 1.0) continue;
-      const bool held = std::find_if(shapes.begin(), shapes.end(), [&](const StudyShape& s) { return s.shape.name == r.shape; })->held_out;
-      passed[held] += r.exact == r.frames;
-      ++total[held];
-    }
-    md << "| " << p.name << " | " << wrong[0] << " | " << wrong[1] << " | " << passed[0] << "/" << total[0] << " | " << passed[1] << "/"
-       << total[1] << " |\n";
-  }
-
+  report_policy_summary(shapes, policies, grid, seq, md);
   // Per shape: the highest noise every sequence frame is exact up to, per policy and keep.
-  for (const auto& s : shapes) {
-    md << "\n## `" << s.shape.name << "`: continuous sequences (" << s.sequence_frames
-       << " frames), highest noise with every frame exact\n\n| policy |";
-    for (double k : keeps) md << ' ' << keep_label(k) << " |";
-    md << "\n|---|";
-    for (std::size_t i = 0; i < keeps.size(); ++i) md << "---:|";
-    md << '\n';
-    for (const auto& p : policies) {
-      md << "| " << p.name << " |";
-      for (double k : keeps) {
-        std::vector<SequenceRow> rows;
-        for (const auto& r : seq)
-          if (r.shape == s.shape.name && r.policy == p.name && r.keep == k) rows.push_back(r);
-        md << ' ' << reached_text(noise_reached(rows, noises, [](const SequenceRow& r) { return r.exact == r.frames; })) << " |";
-      }
-      md << '\n';
-    }
-    md << "\nOne-step trials (" << spec.frames << " per point), highest noise with no wrong frame:\n\n| policy |";
-    for (double k : keeps) md << ' ' << keep_label(k) << " |";
-    md << "\n|---|";
-    for (std::size_t i = 0; i < keeps.size(); ++i) md << "---:|";
-    md << '\n';
-    for (const auto& p : policies) {
-      md << "| " << p.name << " |";
-      const std::string name = host::describe(p.policy);
-      for (double k : keeps) {
-        std::vector<GridRow> rows;
-        for (const auto& r : grid)
-          if (r.shape == s.shape.name && r.policy == name && r.keep == k) rows.push_back(r);
-        md << ' ' << reached_text(noise_reached(rows, noises, [](const GridRow& r) { return r.wrong == 0; })) << " |";
-      }
-      md << '\n';
-    }
-    // Bytes and time per keep for the default policy (the sequences' mean µs per frame, all noise levels).
-    md << "\nThe default policy (`" << host::describe(host::DecimationPolicy{}) << "`): table bytes and mean µs per frame over the sequences\n\n"
-       << "| keep | table bytes | of full | µs/frame | speed-up |\n|---:|---:|---:|---:|---:|\n";
-    double full_us = 0;
-    std::size_t full_bytes = 0;
-    for (double k : keeps) {
-      double us = 0;
-      std::size_t bytes = 0, count = 0;
-      for (const auto& r : seq)
-        if (r.shape == s.shape.name && r.policy == "stencil" && r.keep == k) us += r.mean_us, bytes = r.table_bytes, ++count;
-      us /= std::max<std::size_t>(1, count);
-      if (k == 1.0) full_us = us, full_bytes = bytes;
-      char line[160];
-      std::snprintf(line, sizeof line, "| %s | %zu | %.1f%% | %.1f | %.2fx |\n", keep_label(k).c_str(), bytes,
-                    100.0 * static_cast<double>(bytes) / static_cast<double>(std::max<std::size_t>(1, full_bytes)), us, full_us / us);
-      md << line;
-    }
-
-    // Heat maps: wrong frames of the default policy's sequences, and time.
-    std::vector<std::string> xl, yl;
-    for (double k : keeps) xl.push_back(keep_label(k));
-    for (double n : noises) yl.push_back(percent(n));
-    std::vector<std::vector<double>> wrong(noises.size(), std::vector<double>(keeps.size(), 0)), time = wrong;
-    for (const auto& r : seq) {
-      if (r.shape != s.shape.name || r.policy != "stencil") continue;
-      const auto ni = static_cast<std::size_t>(std::find(noises.begin(), noises.end(), r.noise) - noises.begin());
-      const auto ki = static_cast<std::size_t>(std::find(keeps.begin(), keeps.end(), r.keep) - keeps.begin());
-      wrong[ni][ki] = static_cast<double>(r.frames - r.exact);
-      time[ni][ki] = r.mean_us;
-    }
-    double max_time = 0;
-    for (const auto& row : time) max_time = std::max(max_time, *std::max_element(row.begin(), row.end()));
-    app::svg::write(o.out + "/decimation_wrong_" + s.shape.name + ".svg",
-               app::svg::heatmap(s.shape.name + ": wrong frames of " + std::to_string(s.sequence_frames) + " (default policy)", "references kept",
-                            xl, "noise", yl, wrong, static_cast<double>(s.sequence_frames)));
-    app::svg::write(o.out + "/decimation_time_" + s.shape.name + ".svg",
-               app::svg::heatmap(s.shape.name + ": us per frame (default policy)", "references kept", xl, "noise", yl, time, max_time));
-    md << "\n![wrong frames](decimation_wrong_" << s.shape.name << ".svg) ![time](decimation_time_" << s.shape.name << ".svg)\n";
-  }
-  // Voting time per keep ratio, one run, single thread (the thesis's decimation gain).
-  md << "\n## Voting time per frame (features extracted beforehand; 20% noise, one-step trials, best of 3)\n\n"
-     << "The voter the cost model picks (`auto`, dense_voter.hpp's dense_voter_pays_off) is marked.\n\n"
-     << "| shape, cells | keep | table bytes | refs per feature | CSR µs | dense µs | auto µs (choice) | auto vs full |\n"
-     << "|---|---:|---:|---:|---:|---:|---:|---:|\n";
-  struct Space {
-    std::size_t shape;
-    std::string theta, label;
-  };
-  const std::vector<Space> spaces = {{0, "0:0:1", "curve, 121"}, {1, "0:0:1", "watch, 121"}, {0, "-1:1:3", "curve, 363"},
-                                     {0, "-2:2:5", "curve, 605"}, {0, "-3:3:7", "curve, 847"}};
-  for (const Space& sp : spaces) {
-    const std::vector<VoteTiming> vt = time_voting(shapes[sp.shape].shape, keeps, o.quick ? 30 : 200, sp.theta);
-    for (const VoteTiming& v : vt) {
-      char line[256];
-      std::snprintf(line, sizeof line, "| %s | %s | %zu | %.2f | %.2f | %.2f | %.2f (%s) | %.2fx |\n", sp.label.c_str(),
-                    keep_label(v.keep).c_str(), v.bytes, v.refs_per_feature, v.csr_us, v.dense_us, v.auto_us,
-                    v.auto_dense ? "dense" : "CSR", vt.front().auto_us / v.auto_us);
-      md << line;
-    }
-  }
+  for (const auto& s : shapes) report_shape(o, s, policies, noises, keeps, grid, seq, spec, md);
+  report_voting_time(o, shapes, keeps, md);
   // Template reduction against decimation at equal bytes.
   md << "\n## Reduced template, decimated stencils, both: at equal table bytes (one-step trials)\n\n"
      << "For K: the template reduced (greedy) to characterising value K; the full model's stencils decimated\n"

@@ -1,10 +1,6 @@
 #include "microscope.hpp"
 
 #include <opencv2/imgproc.hpp>
-#if GABARIT_HAVE_OPENCV_TRACKING
-#include <opencv2/tracking.hpp>
-#include <opencv2/tracking/tracking_legacy.hpp>
-#endif
 
 #include <algorithm>
 #include <chrono>
@@ -44,18 +40,7 @@ std::string fmt(double v, int digits = 1) {
   return b;
 }
 
-struct Run {
-  std::string name;
-  std::vector<app::PoseSample> poses;
-  double mean_us = 0;
-  std::vector<double> micros;
-  bool position_only = false;  // OpenCV's box trackers: angle and depth are not estimated
-  double median_us() const {
-    std::vector<double> v = micros;
-    std::sort(v.begin(), v.end());
-    return v.empty() ? 0 : v[v.size() / 2];
-  }
-};
+using Run = MethodRun;  // scene_io.hpp
 
 // The scene and its fine table, shared by the accuracy tables.
 struct Scene {
@@ -126,10 +111,70 @@ SessionOptions cheap_search() {
 
 // 3. Accuracy and time per frame: the tracker's settings, the NCC bank and
 // OpenCV's box trackers on the scene.
+// The accuracy table (visible frames), the pose files and the trajectory plots.
+void report_accuracy(const Scene& sc, const std::string& dir, const std::vector<Run>& runs, std::size_t ncc_run,
+                     std::size_t focus_stack_run, std::ostringstream& md) {
+  namespace fs = std::filesystem;
+  const auto& truth = sc.truth;
+  const double ncc_us = runs[ncc_run].mean_us, ncc_median = runs[ncc_run].median_us();
+  md << "## Accuracy and time per frame\n\n";
+  md << "Visible frames only. Targets: position within 1 px in >= 98%, angle within 1 deg in >= 98%, depth exact in >= 95%, "
+        "reacquired within 10 frames after the occlusion, time <= 1/30 of the NCC bank.\n\n";
+  md << "| method | within 1 px | 2 px | 6 px | 12 px | 20 px | 40 px | angle within 1 deg | depth exact | reacquired after | us/frame mean | median | NCC time / this, mean | median |\n";
+  md << "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+  for (const Run& r : runs) {
+    const app::Accuracy a = app::evaluate(r.poses, truth);
+    const auto share = [&](double limit) {
+      std::size_t n = 0;
+      for (const auto& t : truth) {
+        if (!t.visible) continue;
+        const auto& p = r.poses[t.frame];
+        n += std::hypot(p.x - t.x, p.y - t.y) <= limit;
+      }
+      return fmt(100.0 * static_cast<double>(n) / static_cast<double>(a.frames)) + "%";
+    };
+    std::string reacq;
+    for (int v : a.reacquired_after) reacq += (reacq.empty() ? "" : ", ") + (v < 0 ? std::string("never") : std::to_string(v) + " frames");
+    md << "| " << r.name << " | " << share(1) << " | " << share(2) << " | " << share(6) << " | " << share(12) << " | " << share(20)
+       << " | " << share(40) << " | "
+       << (r.position_only ? std::string("n/a") : fmt(100.0 * static_cast<double>(a.within_1deg) / static_cast<double>(a.frames)) + "%")
+       << " | " << (r.position_only ? std::string("n/a") : fmt(100.0 * static_cast<double>(a.depth_exact) / static_cast<double>(a.frames)) + "%")
+       << " | " << reacq << " | "
+       << fmt(r.mean_us) << " | " << fmt(r.median_us()) << " | " << fmt(ncc_us / r.mean_us) << "x | "
+       << fmt(ncc_median / r.median_us()) << "x |\n";
+    std::ofstream csv(fs::path(dir) / ("poses-" + std::to_string(&r - runs.data()) + ".csv"));
+    csv << "frame,x,y,theta_deg,depth\n";
+    for (const auto& p : r.poses) csv << p.frame << ',' << p.x << ',' << p.y << ',' << p.theta_deg << ',' << p.depth << '\n';
+  }
+  md << "\nThe mean includes the lost frames, where the recovery search places the fine table 147 times (detecting "
+        "features once and voting every second one at each placement, unless said) and votes the best three again; "
+        "the median is a tracking frame.\n\nPose files: poses-N.csv in table order. Trajectories: trajectory-x.svg, trajectory-theta.svg.\n\n";
+  for (const char* axis : {"x", "theta"}) {
+    std::vector<app::svg::Series> series;
+    app::svg::Series t{"truth", {}, {}};
+    for (const auto& p : truth) {
+      t.x.push_back(p.frame);
+      t.y.push_back(axis[0] == 'x' ? p.x : p.theta_deg);
+    }
+    series.push_back(t);
+    for (std::size_t i : {std::size_t{0}, focus_stack_run, ncc_run}) {
+      app::svg::Series s{runs[i].name, {}, {}};
+      for (const auto& p : runs[i].poses) {
+        s.x.push_back(p.frame);
+        s.y.push_back(axis[0] == 'x' ? p.x : p.theta_deg);
+      }
+      series.push_back(s);
+    }
+    app::svg::write((fs::path(dir) / (std::string("trajectory-") + axis + ".svg")).string(),
+               app::svg::lines(std::string("Tracked and true ") + axis + " (thesis Figs. 6.55-6.59)", "frame",
+                          axis[0] == 'x' ? "x (px)" : "theta (deg)", series, false, false));
+  }
+
+}
+
 void accuracy_table(const Scene& sc, const std::string& dir, std::ostringstream& md) {
   namespace fs = std::filesystem;
   const auto& frames = sc.frames;
-  const auto& truth = sc.truth;
   const auto& model_images = sc.model_images;
   const TableView& table = sc.table;
   const Pose& init = sc.init;
@@ -190,107 +235,9 @@ void accuracy_table(const Scene& sc, const std::string& dir, std::ostringstream&
     r.mean_us = total / static_cast<double>(frames.size());
     runs.push_back(r);
   }
-  const double ncc_us = runs.back().mean_us, ncc_median = runs.back().median_us();
   const std::size_t ncc_run = runs.size() - 1, focus_stack_run = 4;
-#if GABARIT_HAVE_OPENCV_TRACKING
-  {
-    // OpenCV's correlation-filter trackers: position only (no angle or depth),
-    // initialised with the object's box in frame 0, on BGR copies of the frames
-    // (made before timing; KCF and CSRT use colour names otherwise).
-    std::vector<cv::Mat> bgr;
-    for (const auto& f : frames) {
-      cv::Mat m;
-      cv::cvtColor(cv::Mat(static_cast<int>(f.height), static_cast<int>(f.width), CV_8U, const_cast<std::uint8_t*>(f.pixels.data())), m,
-                   cv::COLOR_GRAY2BGR);
-      bgr.push_back(m);
-    }
-    const int side = model_images[0].width > 16 ? static_cast<int>(model_images[0].width) - 16 : static_cast<int>(model_images[0].width);
-    const cv::Rect box(static_cast<int>(std::lround(init.x)) - side / 2, static_cast<int>(std::lround(init.y)) - side / 2, side, side);
-    const auto run_cv = [&](const std::string& name, auto&& init_tracker, auto&& update) {
-      Run r{name, {}, 0, {}};
-      double total = 0;
-      cv::Rect2d at = box;  // a failed update keeps the last box
-      for (std::uint32_t f = 0; f < frames.size(); ++f) {
-        const auto t = Clock::now();
-        if (f == 0) init_tracker(bgr[f], box);
-        else update(bgr[f], at);
-        r.micros.push_back(micros_since(t));
-        total += r.micros.back();
-        r.poses.push_back({f, at.x + at.width / 2, at.y + at.height / 2, 0, 0, true});
-      }
-      r.mean_us = total / static_cast<double>(frames.size());
-      r.position_only = true;
-      runs.push_back(r);
-    };
-    {
-      cv::Ptr<cv::legacy::TrackerMOSSE> mosse = cv::legacy::TrackerMOSSE::create();
-      run_cv("OpenCV MOSSE (position only)", [&](const cv::Mat& m, const cv::Rect& b) { mosse->init(m, cv::Rect2d(b)); },
-             [&](const cv::Mat& m, cv::Rect2d& b) { mosse->update(m, b); });
-    }
-    for (const bool csrt : {false, true}) {
-      cv::Ptr<cv::Tracker> tracker = csrt ? cv::Ptr<cv::Tracker>(cv::TrackerCSRT::create()) : cv::Ptr<cv::Tracker>(cv::TrackerKCF::create());
-      run_cv(csrt ? "OpenCV CSRT (position only)" : "OpenCV KCF (position only)",
-             [&](const cv::Mat& m, const cv::Rect& b) { tracker->init(m, b); },
-             [&](const cv::Mat& m, cv::Rect2d& b) {
-               cv::Rect r;
-               if (tracker->update(m, r)) b = r;
-             });
-    }
-  }
-#endif
-  md << "## app::Accuracy and time per frame\n\n";
-  md << "Visible frames only. Targets: position within 1 px in >= 98%, angle within 1 deg in >= 98%, depth exact in >= 95%, "
-        "reacquired within 10 frames after the occlusion, time <= 1/30 of the NCC bank.\n\n";
-  md << "| method | within 1 px | 2 px | 6 px | 12 px | 20 px | 40 px | angle within 1 deg | depth exact | reacquired after | us/frame mean | median | NCC time / this, mean | median |\n";
-  md << "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
-  for (const Run& r : runs) {
-    const app::Accuracy a = app::evaluate(r.poses, truth);
-    const auto share = [&](double limit) {
-      std::size_t n = 0;
-      for (const auto& t : truth) {
-        if (!t.visible) continue;
-        const auto& p = r.poses[t.frame];
-        n += std::hypot(p.x - t.x, p.y - t.y) <= limit;
-      }
-      return fmt(100.0 * static_cast<double>(n) / static_cast<double>(a.frames)) + "%";
-    };
-    std::string reacq;
-    for (int v : a.reacquired_after) reacq += (reacq.empty() ? "" : ", ") + (v < 0 ? std::string("never") : std::to_string(v) + " frames");
-    md << "| " << r.name << " | " << share(1) << " | " << share(2) << " | " << share(6) << " | " << share(12) << " | " << share(20)
-       << " | " << share(40) << " | "
-       << (r.position_only ? std::string("n/a") : fmt(100.0 * static_cast<double>(a.within_1deg) / static_cast<double>(a.frames)) + "%")
-       << " | " << (r.position_only ? std::string("n/a") : fmt(100.0 * static_cast<double>(a.depth_exact) / static_cast<double>(a.frames)) + "%")
-       << " | " << reacq << " | "
-       << fmt(r.mean_us) << " | " << fmt(r.median_us()) << " | " << fmt(ncc_us / r.mean_us) << "x | "
-       << fmt(ncc_median / r.median_us()) << "x |\n";
-    std::ofstream csv(fs::path(dir) / ("poses-" + std::to_string(&r - runs.data()) + ".csv"));
-    csv << "frame,x,y,theta_deg,depth\n";
-    for (const auto& p : r.poses) csv << p.frame << ',' << p.x << ',' << p.y << ',' << p.theta_deg << ',' << p.depth << '\n';
-  }
-  md << "\nThe mean includes the lost frames, where the recovery search places the fine table 147 times (detecting "
-        "features once and voting every second one at each placement, unless said) and votes the best three again; "
-        "the median is a tracking frame.\n\nPose files: poses-N.csv in table order. Trajectories: trajectory-x.svg, trajectory-theta.svg.\n\n";
-  for (const char* axis : {"x", "theta"}) {
-    std::vector<app::svg::Series> series;
-    app::svg::Series t{"truth", {}, {}};
-    for (const auto& p : truth) {
-      t.x.push_back(p.frame);
-      t.y.push_back(axis[0] == 'x' ? p.x : p.theta_deg);
-    }
-    series.push_back(t);
-    for (std::size_t i : {std::size_t{0}, focus_stack_run, ncc_run}) {
-      app::svg::Series s{runs[i].name, {}, {}};
-      for (const auto& p : runs[i].poses) {
-        s.x.push_back(p.frame);
-        s.y.push_back(axis[0] == 'x' ? p.x : p.theta_deg);
-      }
-      series.push_back(s);
-    }
-    app::svg::write((fs::path(dir) / (std::string("trajectory-") + axis + ".svg")).string(),
-               app::svg::lines(std::string("Tracked and true ") + axis + " (thesis Figs. 6.55-6.59)", "frame",
-                          axis[0] == 'x' ? "x (px)" : "theta (deg)", series, false, false));
-  }
-
+  opencv_box_trackers(frames, model_images, init, runs);
+  report_accuracy(sc, dir, runs, ncc_run, focus_stack_run, md);
 }
 
 // 3b. The same tracker on other scenes (other trajectories, occlusions and

@@ -1,8 +1,13 @@
 #include "scene_io.hpp"
 
 #include <opencv2/imgproc.hpp>
+#if GABARIT_HAVE_OPENCV_TRACKING
+#include <opencv2/tracking.hpp>
+#include <opencv2/tracking/tracking_legacy.hpp>
+#endif
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 
@@ -157,5 +162,52 @@ std::vector<PyramidDetection> PyramidMatcher::detect(const app::GrayImage& frame
   std::sort(out.begin(), out.end(), [](const PyramidDetection& a, const PyramidDetection& b) { return a.score > b.score; });
   return out;
 }
+
+#if GABARIT_HAVE_OPENCV_TRACKING
+void opencv_box_trackers(const std::vector<app::GrayImage>& frames, const std::vector<app::GrayImage>& model_images, const Pose& init,
+                         std::vector<MethodRun>& runs) {
+  std::vector<cv::Mat> bgr;
+  for (const auto& f : frames) {
+    cv::Mat m;
+    cv::cvtColor(cv::Mat(static_cast<int>(f.height), static_cast<int>(f.width), CV_8U, const_cast<std::uint8_t*>(f.pixels.data())), m,
+                 cv::COLOR_GRAY2BGR);
+    bgr.push_back(m);
+  }
+  const int side = model_images[0].width > 16 ? static_cast<int>(model_images[0].width) - 16 : static_cast<int>(model_images[0].width);
+  const cv::Rect box(static_cast<int>(std::lround(init.x)) - side / 2, static_cast<int>(std::lround(init.y)) - side / 2, side, side);
+  const auto run_cv = [&](const std::string& name, auto&& init_tracker, auto&& update) {
+    MethodRun r{name, {}, 0, {}};
+    double total = 0;
+    cv::Rect2d at = box;  // a failed update keeps the last box
+    for (std::uint32_t f = 0; f < frames.size(); ++f) {
+      const auto t = std::chrono::steady_clock::now();
+      if (f == 0) init_tracker(bgr[f], box);
+      else update(bgr[f], at);
+      r.micros.push_back(std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t).count());
+      total += r.micros.back();
+      r.poses.push_back({f, at.x + at.width / 2, at.y + at.height / 2, 0, 0, true});
+    }
+    r.mean_us = total / static_cast<double>(frames.size());
+    r.position_only = true;
+    runs.push_back(r);
+  };
+  {
+    cv::Ptr<cv::legacy::TrackerMOSSE> mosse = cv::legacy::TrackerMOSSE::create();
+    run_cv("OpenCV MOSSE (position only)", [&](const cv::Mat& m, const cv::Rect& b) { mosse->init(m, cv::Rect2d(b)); },
+           [&](const cv::Mat& m, cv::Rect2d& b) { mosse->update(m, b); });
+  }
+  for (const bool csrt : {false, true}) {
+    cv::Ptr<cv::Tracker> tracker = csrt ? cv::Ptr<cv::Tracker>(cv::TrackerCSRT::create()) : cv::Ptr<cv::Tracker>(cv::TrackerKCF::create());
+    run_cv(csrt ? "OpenCV CSRT (position only)" : "OpenCV KCF (position only)",
+           [&](const cv::Mat& m, const cv::Rect& b) { tracker->init(m, b); },
+           [&](const cv::Mat& m, cv::Rect2d& b) {
+             cv::Rect r;
+             if (tracker->update(m, r)) b = r;
+           });
+  }
+}
+#else
+void opencv_box_trackers(const std::vector<app::GrayImage>&, const std::vector<app::GrayImage>&, const Pose&, std::vector<MethodRun>&) {}
+#endif
 
 }  // namespace gabarit::bench

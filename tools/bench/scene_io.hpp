@@ -5,11 +5,13 @@
 
 #include <opencv2/core.hpp>
 
+#include <algorithm>
 #include <filesystem>
 #include <map>
 #include <string>
 #include <vector>
 
+#include "gabarit/app/evaluation.hpp"
 #include "gabarit/app/image_io.hpp"
 #include "gabarit/pose.hpp"
 
@@ -39,6 +41,28 @@ std::vector<std::string> scene_model_paths(const std::filesystem::path& seq, int
 // templates, rotated once per 0.5 degree and cached) is matched with
 // TM_CCOEFF_NORMED at every translation of +-range px; the best match is the
 // new pose.
+// One method's run over a scene: its poses and its time per frame.
+struct MethodRun {
+  std::string name;
+  std::vector<app::PoseSample> poses;
+  double mean_us = 0;
+  std::vector<double> micros;
+  bool position_only = false;  // OpenCV's box trackers: angle and depth are not estimated
+  double median_us() const {
+    std::vector<double> v = micros;
+    std::sort(v.begin(), v.end());
+    return v.empty() ? 0 : v[v.size() / 2];
+  }
+};
+
+// OpenCV's correlation-filter trackers (MOSSE, KCF, CSRT): position only (no
+// angle or depth), initialised with the object's box in frame 0, on BGR
+// copies of the frames (made before timing; KCF and CSRT use colour names
+// otherwise); appended to `runs`. Nothing where OpenCV's tracking module
+// (libopencv-contrib-dev) is not built.
+void opencv_box_trackers(const std::vector<app::GrayImage>& frames, const std::vector<app::GrayImage>& model_images, const Pose& init,
+                         std::vector<MethodRun>& runs);
+
 class NccBank {
  public:
   NccBank(const std::vector<app::GrayImage>& models, int range, double step_deg, int steps);

@@ -294,7 +294,7 @@ std::string overlap_map_svg(const TableView& t, std::uint32_t cell) {
   std::uint32_t widest = 1;
   for (std::uint32_t p = 0; p < t.roi_slots(); ++p) widest = std::max(widest, t.references_begin(p + 1) - t.references_begin(p));
   std::ostringstream o;
-  o << "<app::svg xmlns='http://www.w3.org/2000/svg' width='" << w << "' height='" << h << "' font-family='sans-serif' font-size='12'>\n"
+  o << "<svg xmlns='http://www.w3.org/2000/svg' width='" << w << "' height='" << h << "' font-family='sans-serif' font-size='12'>\n"
     << "<rect width='100%' height='100%' fill='white'/>\n<text x='10' y='18'>stencil of cell " << cell
     << ": its pixels by overlap (white 1 stencil, dark " << widest << "); grey: other stencils' pixels</text>\n";
   for (std::uint32_t p = 0; p < t.roi_slots(); ++p) {
@@ -320,7 +320,7 @@ std::string margins_svg(const TableAnalysis& a) {
   for (const auto& s : a.stencils) top = std::max(top, std::max(s.margin == kUnreachable ? 0 : s.margin, s.stencil_size));
   const double bar = static_cast<double>(w - 60) / std::max(1, n);
   std::ostringstream o;
-  o << "<app::svg xmlns='http://www.w3.org/2000/svg' width='" << w << "' height='" << h << "' font-family='sans-serif' font-size='12'>\n"
+  o << "<svg xmlns='http://www.w3.org/2000/svg' width='" << w << "' height='" << h << "' font-family='sans-serif' font-size='12'>\n"
     << "<rect width='100%' height='100%' fill='white'/>\n<text x='10' y='18'>per stencil (cell order): size (grey) and margin of error (red); max "
     << top << "</text>\n";
   for (int i = 0; i < n; ++i) {
