@@ -10,13 +10,33 @@
 #   - each tracked with gabarit track's defaults (the tracking session) and
 #     compared with the ground truth,
 # printing accuracy and per-frame time. Output stays in build/demo/.
+#
+# Usage: demo.sh [--gabarit PATH] [--out DIR]
+#   --gabarit PATH  use this gabarit as it is: no install, no build
+#                   (the docs.demo test runs the demo so)
+#   --out DIR       write into DIR (new or empty) instead of build/demo
 set -euo pipefail
+g="" out=""
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --gabarit) g=$(realpath "${2:?--gabarit needs a path}"); shift 2 ;;
+    --out) out=$(realpath -m "${2:?--out needs a folder}"); shift 2 ;;
+    -h|--help) sed -n '2,/^set -euo/p' "$0" | sed '$d; s/^# \{0,1\}//'; exit 0 ;;
+    *) echo "demo.sh: unknown argument '$1' (see --help)" >&2; exit 2 ;;
+  esac
+done
 cd "$(dirname "$0")/../.."
-bash tools/scripts/setup-debian.sh
-cmake --preset release >/dev/null
-cmake --build --preset release
-g=build/release/tools/gabarit
-out=build/demo
+if [ -z "$g" ]; then
+  bash tools/scripts/setup-debian.sh
+  cmake --preset release >/dev/null
+  cmake --build --preset release
+  g=build/release/tools/gabarit
+fi
+[ -x "$g" ] || { echo "demo.sh: $g is not an executable gabarit" >&2; exit 2; }
+if [ -n "$out" ] && [ -e "$out" ] && [ -n "$(ls -A "$out" 2>/dev/null)" ]; then
+  echo "demo.sh: $out exists and is not empty; give a new folder" >&2; exit 2
+fi
+out=${out:-build/demo}
 noise=${NOISE:-0.3}
 rm -rf "$out" && mkdir -p "$out"
 $g synth --shape random --points 200 --frames 300 --max-step 4 --noise "$noise" --seed 1 -o "$out/seq"
