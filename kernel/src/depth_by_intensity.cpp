@@ -140,8 +140,13 @@ bool correlation(const ImageView& frame, const ImageView& m, const Pose& pose, c
 
 bool valid_inputs(const ImageView& frame, const Pose& pose, const FocusStack& stack) noexcept {
   // The bounds keep the 16.16 geometry's products below 2^62.
-  if (!frame.valid() || stack.images.empty() || stack.images.size() > 65535u || stack.step == 0 ||
-      stack.step > kMaxStackStep || !pose_in_range(pose) || !within_limit(pose.theta_deg, 1.0e5f) ||
+  return frame.valid() && pose_in_range(pose) && within_limit(pose.theta_deg, 1.0e5f) && valid_focus_stack(stack);
+}
+
+}  // namespace
+
+bool valid_focus_stack(const FocusStack& stack) noexcept {
+  if (stack.images.empty() || stack.images.size() > 65535u || stack.step == 0 || stack.step > kMaxStackStep ||
       !within_limit(stack.ref_x, static_cast<float>(kMaxStackSide)) ||
       !within_limit(stack.ref_y, static_cast<float>(kMaxStackSide))) {
     return false;
@@ -155,7 +160,10 @@ bool valid_inputs(const ImageView& frame, const Pose& pose, const FocusStack& st
   return true;
 }
 
-}  // namespace
+bool correlation_at(const ImageView& frame, const Pose& pose, const FocusStack& stack, std::uint16_t depth,
+                    float& signed_r2) noexcept {
+  return correlation(frame, stack.images[depth], pose, stack, signed_r2);
+}
 
 Status depth_by_intensity(const ImageView& frame, const Pose& pose, const FocusStack& stack, std::uint16_t& depth,
                           float switch_margin) noexcept {

@@ -24,7 +24,10 @@ Status TrackingSession::start(const SessionOptions& options, const Pose& initial
   if (!valid(options.filter) || !valid(options.recovery) || !pose_in_range(initial) || initial.depth >= fine_.depth_count() ||
       !(options.theta_observability >= 0.0f && options.theta_observability <= 1.0f) ||
       !(options.depth_switch_correlation >= 0.0f && options.depth_switch_correlation <= 2.0f) ||
-      !(options.depth_votes_decisive >= 0.0f) || !(options.clutter_floor >= 0.0f && options.clutter_floor <= 1.0f)) {
+      !(options.depth_votes_decisive >= 0.0f) || !(options.clutter_floor >= 0.0f && options.clutter_floor <= 1.0f) ||
+      options.vote_proposals < 1 || options.vote_proposals > kMaxVoteProposals ||
+      !(options.verification.spacing_px > 0.0f && options.verification.spacing_px <= 4.0f) ||
+      !(options.verification.distinct_px >= 0.0f)) {
     return Status::kInvalidArgument;
   }
   if (coarse_ != nullptr && coarse_->depth_count() != fine_.depth_count()) return Status::kInvalidArgument;
@@ -49,10 +52,26 @@ Status TrackingSession::step(const ImageView& image, SessionScratch scratch, Ses
   out = SessionResult{};
   depth_margin_ = 0.0f;
   ++last_confident_.frames_since;
+  verdict_ = Verdict{};
   GABARIT_TRY(lost_ ? recover(image, scratch, out) : track_fine(image, scratch, out));
-  // Intensities only where there is a measurement to compare at: a frame
-  // without one has no pose worth correlating the stack with.
-  if (stack_ != nullptr && out.state != TrackState::kLost && out.confidence != Confidence::kNone) {
+  if (verdict_.found) {
+    out.verified_score = verdict_.score;
+    out.verified_runner_up = verdict_.runner_up;
+  }
+  out.correlations = verdict_.correlations;
+  if (verifying()) {
+    // The verified pose is already refined in angle; its depth is the
+    // best-correlated stack image there (hysteresis: the current depth stays
+    // unless another beats it by the margin).
+    if (verdict_.found && fine_.depth_count() > 1 && out.state != TrackState::kLost &&
+        !(depth_margin_ >= options_.depth_votes_decisive)) {
+      GABARIT_TRY(depth_by_intensity(image, pose_, *stack_, pose_.depth, options_.depth_switch_correlation));
+      out.correlations += fine_.depth_count();
+    }
+    out.pose = pose_;
+  } else if (stack_ != nullptr && out.state != TrackState::kLost && out.confidence != Confidence::kNone) {
+    // Intensities only where there is a measurement to compare at: a frame
+    // without one has no pose worth correlating the stack with.
     // Only what the table can tell apart: the depth where it has several
     // and the votes did not choose it clearly themselves (edge features
     // change little with focus), the angle where it rotates.
@@ -119,9 +138,28 @@ bool TrackingSession::theta_observable(std::span<const VoteCounter> counters, st
   return s0 - neighbour >= options_.theta_observability * s0;
 }
 
+// The vote's best cells as poses, best first (cells without a vote left out).
+void TrackingSession::propose_top_cells(std::span<const VoteCounter> counters, const Pose& centre, Measurement& m) const noexcept {
+  CellScore top[kMaxVoteProposals];
+  std::uint32_t k = options_.vote_proposals;
+  if (k > fine_.cell_count()) k = fine_.cell_count();
+  if (select_top_cells(fine_, counters, std::span<CellScore>(top, k)) != Status::kOk) return;
+  for (std::uint32_t i = 0; i < k && top[i].votes > 0; ++i)
+    m.proposals[m.proposal_count++] = pose_of_cell(fine_, top[i].cell, centre, m.step.roi_centre_x, m.step.roi_centre_y);
+}
+
+// Vote, then verify: the best-correlated proposal, refined, replaces
+// `chosen` (which is proposed first, so it wins a tie).
+Status TrackingSession::verify_choice(const ImageView& image, Proposals& proposals, Pose& chosen) noexcept {
+  GABARIT_TRY(verify(image, *stack_, proposals, options_.verification, verdict_));
+  if (verdict_.found) chosen = verdict_.pose;
+  return Status::kOk;
+}
+
 Status TrackingSession::measure_at(const ImageView& image, const Pose& centre, SessionScratch scratch, Measurement& m) noexcept {
   m = Measurement{};
   GABARIT_TRY(track_step(fine_, detector_, image, centre, scratch.fine, m.step));
+  if (verifying()) propose_top_cells(scratch.fine.counters, centre, m);
   GatedChoice choice;
   GABARIT_TRY(filter_.choose(fine_, scratch.fine.counters, centre, m.step.roi_centre_x, m.step.roi_centre_y, pose_.depth, choice));
   if (!choice.found) return Status::kOk;
@@ -184,6 +222,11 @@ Status TrackingSession::track_fine(const ImageView& image, SessionScratch scratc
 
   Measurement m;
   GABARIT_TRY(measure_at(image, predicted, scratch, m));
+  Proposals proposals;
+  const auto propose = [&proposals](const Measurement& from) {
+    for (std::uint32_t i = 0; i < from.proposal_count; ++i) proposals.add(from.proposals[i]);
+  };
+  propose(m);
   // The plain loop's choice this frame: the best cell of the vote at the
   // last pose (here the prediction's vote when they coincide).
   StepResult plain = m.step;
@@ -196,6 +239,7 @@ Status TrackingSession::track_fine(const ImageView& image, SessionScratch scratc
     Measurement at_last;
     GABARIT_TRY(measure_at(image, pose_, scratch, at_last));
     plain = at_last.step;
+    propose(at_last);
     if (better(at_last, m)) m = at_last;
   }
   out.step = m.step;
@@ -203,20 +247,36 @@ Status TrackingSession::track_fine(const ImageView& image, SessionScratch scratc
   depth_margin_ = m.depth_margin;
   const Confidence confidence = m.confidence;
   if (confidence != Confidence::kNone) static_cast<void>(filter_.grade(m.score, m.next_score));  // moves the reference score
+  // No measurement the filter trusts: partly hidden, the target still wins
+  // the plain loop's vote, so follow that (never worse than the thesis's
+  // loop); the filter only predicts, and if it stays unsure the target is
+  // declared lost and searched for around the last confident pose.
+  Pose chosen = confidence != Confidence::kNone ? m.pose
+                : options_.follow_when_unsure && plain.state != TrackState::kLost ? plain.pose
+                                                                                   : predicted;
+  if (verifying()) {
+    // The session's own choice first, then the votes' other proposals.
+    Proposals all;
+    all.add(chosen);
+    if (plain.state != TrackState::kLost) all.add(plain.pose);
+    for (std::uint32_t i = 0; i < proposals.count; ++i) all.add(proposals.poses[i]);
+    all.add(predicted);
+    all.add(pose_);
+    GABARIT_TRY(verify_choice(image, all, chosen));
+    // Where the votes chose the depth clearly, they keep it (edge features
+    // tell depths apart better than intensities over a textured object).
+    if (verdict_.found && confidence != Confidence::kNone && m.depth_margin >= options_.depth_votes_decisive)
+      chosen.depth = m.pose.depth;
+  }
   if (confidence != Confidence::kNone) {
     // The angle is measured even where the votes barely constrain it (only
     // its sub-cell offset is dropped): left out of the filter, its velocity
     // went stale and the suite's tuning half tracked worse (docs/tracking.md).
-    filter_.update(confidence, m.pose);
-    pose_ = m.pose;
+    filter_.update(confidence, chosen);
   } else {
-    // No measurement the filter trusts. Partly hidden, the target still
-    // wins the plain loop's vote, so follow that (never worse than the
-    // thesis's loop); the filter only predicts, and if it stays unsure the
-    // target is declared lost and searched for around the last confident pose.
-    pose_ = options_.follow_when_unsure && plain.state != TrackState::kLost ? plain.pose : predicted;
     filter_.coast();
   }
+  pose_ = chosen;
   out.confidence = confidence;
   out.state = state_of(confidence);
   if (filter_.lost()) {

@@ -38,6 +38,7 @@ int synth_scene(const app::Args& args) {
   o.seed = static_cast<std::uint64_t>(args.integer("--seed", 1, 0, INT64_MAX));
   o.frames = static_cast<std::uint32_t>(args.integer("--frames", o.frames, 1, 100000));
   o.depths = static_cast<std::uint16_t>(args.integer("--depths", 1, 1, 32));
+  if (args.has("--clean")) o.noise_sigma = 0.0, o.illumination = 0.0, o.blur_every = 0;
   if (args.has("--occlusion")) {
     unsigned start = 0, count = 0;
     char tail = 0;
@@ -63,7 +64,7 @@ int synth_scene(const app::Args& args) {
 int synth_suite(const app::Args& args, bool pipette) {
   const char* option = pipette ? "--pipette-suite" : "--suite";
   for (const char* other : {"--points", "--max-step", "--noise", "--depths", "--occlusion", "--size", "--seed", "--background",
-                            "--motion", "--occlusion-side", "--stack"})
+                            "--motion", "--occlusion-side", "--stack", "--clean"})
     if (args.has(other)) throw app::UsageError(std::string(other) + " does not apply to " + option + " (its scenes are fixed)");
   const std::uint32_t all = pipette ? host::kPipetteScenes : host::kSuiteScenes;
   const auto count = static_cast<std::uint32_t>(args.integer("--scenes", all, 1, pipette ? all : 1000));
@@ -114,6 +115,7 @@ int synth(const std::vector<std::string>& argv) {
               "                          random walk within +-PX that reverses at the margins)"},
              {"--occlusion-side", "SIDE", "--scene: cover (default: all at once), left, right, top, bottom (sliding in), none"},
              {"--stack", "KIND", "--scene: tilted (default: no two depths alike) or alike (two middle depths nearly equal)"},
+             {"--clean", "", "--scene: no sensor noise, illumination change or motion blur (sub-pixel accuracy checks)"},
              {"--suite", "", "the scene suite (fixed scenes; --frames and --scenes apply)"},
              {"--pipette-suite", "", "the glass-pipette scenes (fixed; 0-3 tuning, 4-7 held out; --frames, default 200,\n"
               "                          and --scenes apply)"},
@@ -134,7 +136,7 @@ int synth(const std::vector<std::string>& argv) {
     throw app::UsageError("--scenes applies to --suite and --pipette-suite");
   if (args.has("--suite") || args.has("--pipette-suite")) return synth_suite(args, args.has("--pipette-suite"));
   if (args.has("--scene")) return synth_scene(args);
-  for (const char* scene_only : {"--depths", "--occlusion", "--background", "--occlusion-side", "--stack"})
+  for (const char* scene_only : {"--depths", "--occlusion", "--background", "--occlusion-side", "--stack", "--clean"})
     if (args.has(scene_only)) throw app::UsageError(std::string(scene_only) + " applies to --scene");
   host::SynthOptions o;
   o.seed = static_cast<std::uint64_t>(args.integer("--seed", 1, 0, INT64_MAX));

@@ -53,6 +53,19 @@ inline constexpr std::uint32_t kMaxStackStep = 256;
 // frames within 1 degree (docs/tracking.md). kInvalidArgument as above or
 // for a depth outside the stack; kOk with `theta_deg` unchanged when the
 // object is leaving the frame.
+// The stack valid for the calls above (and correlation_at): images of one
+// size within the bounds, a step in 1..kMaxStackStep, at most 65535 depths.
+[[nodiscard]] bool valid_focus_stack(const FocusStack& stack) noexcept;
+
+// The normalised cross-correlation of stack image `depth` with the frame at
+// `pose` (its depth ignored), as sign(r) r^2 (ordered like r, no square
+// root), exact integer sums then float: the same bits on every target.
+// False when fewer than 16 samples fall inside the frame or either side is
+// flat. Preconditions: valid_focus_stack(stack), depth < the stack's size,
+// pose_in_range(pose) and |theta| < 1e5.
+[[nodiscard]] bool correlation_at(const ImageView& frame, const Pose& pose, const FocusStack& stack, std::uint16_t depth,
+                                  float& signed_r2) noexcept;
+
 inline constexpr int kAngleSteps = 2;
 inline constexpr float kAngleIncrementDeg = 0.75f;
 [[nodiscard]] Status angle_by_intensity(const ImageView& frame, const Pose& pose, const FocusStack& stack,

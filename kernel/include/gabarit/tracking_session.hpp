@@ -23,6 +23,7 @@
 #include "gabarit/recovery_search.hpp"
 #include "gabarit/refinement.hpp"
 #include "gabarit/tracker.hpp"
+#include "gabarit/verification.hpp"
 
 namespace gabarit {
 
@@ -46,7 +47,7 @@ struct SessionOptions {
   float theta_observability = 0.05f;
   // With a focus stack: the depth by intensity replaces the votes' depth
   // only if it correlates better by this much (depth_by_intensity.hpp).
-  float depth_switch_correlation = 0.0f;
+  float depth_switch_correlation = 0.02f;
   // With refine: the sub-cell offset by a least-squares alignment of the
   // matched features (refinement.hpp) instead of the parabola through the
   // neighbouring cells' scores.
@@ -63,9 +64,20 @@ struct SessionOptions {
   // frames in heavy noise, where noise alone scores nearly what the target
   // does (tracking_session.cpp).
   float clutter_floor = 0.5f;
+  // With the motion filter and a focus stack: vote, then verify
+  // (verification.hpp). The frame's pose is the best-correlated of the
+  // proposals (the vote's best `vote_proposals` cells at the prediction and
+  // at the last pose, the gate's choice, the plain loop's winner, the
+  // prediction and the last pose), refined on the correlation; its depth the
+  // best-correlated stack image there, kept unless another beats it by
+  // depth_switch_correlation.
+  bool verify = true;
+  std::uint8_t vote_proposals = 4;  // 1..kMaxVoteProposals
+  VerifyOptions verification;
 };
+inline constexpr std::uint8_t kMaxVoteProposals = 6;
 // track_step frame after frame, nothing added: the thesis's tracker.
-inline constexpr SessionOptions kPlainSession{false, false, false, {}, {}, false, false, 0.0f, 0.0f, false, 1.0e38f, 0.0f};
+inline constexpr SessionOptions kPlainSession{false, false, false, {}, {}, false, false, 0.0f, 0.0f, false, 1.0e38f, 0.0f, false, 4, {}};
 
 struct SessionResult {
   Pose pose;                 // the session's estimate after this frame
@@ -73,6 +85,10 @@ struct SessionResult {
   Confidence confidence = Confidence::kNone;
   TrackState state = TrackState::kLost;
   float score = 0.0f;        // normalised score of the chosen cell
+  // Verifying: the chosen pose's correlation with the model image (-1..1),
+  // the best distinct proposal's (-1 without one), and correlations computed.
+  float verified_score = 0.0f, verified_runner_up = -1.0f;
+  std::uint32_t correlations = 0;
   bool searched_coarse = false;
   bool reacquired = false;   // this frame ended a lost period
 };
@@ -112,6 +128,8 @@ class TrackingSession {
     Pose pose;                     // the chosen cell's pose, refined
     bool theta_observable = true;
     float depth_margin = 0.0f;     // the chosen cell's score over the best other depth's, minus 1
+    Pose proposals[kMaxVoteProposals];  // verifying: the vote's best cells, best first
+    std::uint32_t proposal_count = 0;
   };
 
  private:
@@ -123,6 +141,9 @@ class TrackingSession {
   Status track_fine(const ImageView& image, SessionScratch scratch, SessionResult& out) noexcept;
   Status recover(const ImageView& image, SessionScratch scratch, SessionResult& out) noexcept;
   void begin_lost() noexcept;
+  bool verifying() const noexcept { return stack_ != nullptr && options_.verify && options_.motion_filter; }
+  void propose_top_cells(std::span<const VoteCounter> counters, const Pose& centre, Measurement& m) const noexcept;
+  Status verify_choice(const ImageView& image, Proposals& proposals, Pose& chosen) noexcept;
 
   const TableView& fine_;
   const TableView* coarse_;
@@ -138,6 +159,7 @@ class TrackingSession {
   DetectionRecovery* detection_ = nullptr;
   std::uint32_t lost_frames_ = 0;  // frames of this lost period so far
   float depth_margin_ = 0.0f;  // this frame's measurement's (0 without one)
+  Verdict verdict_;            // verifying: this frame's
 };
 
 }  // namespace gabarit

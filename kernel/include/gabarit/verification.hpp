@@ -1,0 +1,76 @@
+// Vote, then verify: the votes propose, a dense score decides.
+//
+// A vote counts edge pixels in stencils; on a small object, a near-circular
+// outline or a textured background the cell it ranks first is often a
+// neighbour of the true one, or clutter (docs/tracking.md, "Vote, then
+// verify"). So the session gathers a few proposals each frame (the vote's
+// best cells, the plain loop's winner, the motion filter's prediction, the
+// last pose), scores each by the normalised cross-correlation of the model
+// image (the focus stack's image of the proposal's depth) with the frame at
+// that pose, keeps the best, and refines its x, y and angle on the same
+// score: a quadratic fitted by least squares to 19 correlations around it
+// (the centre, six along the axes, twelve on the diagonals of each pair),
+// its peak taken by a Newton step (fixed-size Eigen), twice, at half the
+// spacing the second time. Correlations are exact integer sums
+// (depth_by_intensity.hpp), the algebra scalar floats: the same bits on
+// every target.
+//
+// NCC over the model image was chosen over the mean cosine of gradient
+// directions because it is the score a user compares us with (an OpenCV
+// matchTemplate bank), it is already the session's depth and angle measure
+// (the same integer code, tested across targets), and it is invariant to the
+// gain and offset changes of the suite's illumination.
+#pragma once
+
+#include <cstdint>
+
+#include "gabarit/depth_by_intensity.hpp"
+#include "gabarit/image_view.hpp"
+#include "gabarit/pose.hpp"
+#include "gabarit/status.hpp"
+
+namespace gabarit {
+
+inline constexpr std::uint32_t kMaxProposals = 16;
+
+// A fixed-size set of poses to verify, in the order they were added.
+struct Proposals {
+  Pose poses[kMaxProposals];
+  std::uint32_t count = 0;
+  // Adds `p` unless the set is full or holds the same pose already.
+  void add(const Pose& p) noexcept;
+};
+
+struct VerifyOptions {
+  bool refine = true;  // sub-pixel x, y and sub-degree angle on the score
+  // The refinement's first spacing: this many pixels along x and y, and the
+  // angle that moves the model's outline (half its larger side from the
+  // reference point) by as much, within [0.1, 1] degree.
+  float spacing_px = 0.5f;
+  // The refinement samples the model at every stack.step-th pixel, or finer
+  // until it has at least this many samples (a small model).
+  std::uint32_t refine_samples = 4096;
+  // The runner-up: the best proposal at least this far from the winner
+  // (pixels), or at another depth; what tells an ambiguous frame.
+  float distinct_px = 2.0f;
+};
+
+struct Verdict {
+  bool found = false;        // some proposal lay inside the frame with contrast on both sides
+  Pose pose;                 // the best proposal, refined
+  float score = 0.0f;        // its correlation r, -1..1
+  float runner_up = -1.0f;   // the best distinct proposal's r (-1 without one)
+  std::uint32_t winner = 0;  // the index of the winning proposal
+  std::uint32_t correlations = 0;  // correlations computed (the cost)
+};
+
+// kInvalidArgument for an invalid frame or stack, or a proposal outside
+// pose_in_range, with |theta| >= 1e5 or a depth the stack does not have.
+[[nodiscard]] Status verify(const ImageView& frame, const FocusStack& stack, const Proposals& proposals,
+                            const VerifyOptions& options, Verdict& out) noexcept;
+
+// r from the signed r^2 correlation_at gives, by Newton's iteration in
+// float (+, -, *, / only: the same bits on every target).
+float correlation_from_signed_square(float signed_r2) noexcept;
+
+}  // namespace gabarit
