@@ -45,6 +45,7 @@ SessionOptions session_options(const SessionProfile& p) noexcept {
       o.theta_observability = defaults.theta_observability;
     }
   }
+  o.verify = !p.plain && p.verify;
   o.align_features = p.subcell == SubCellKind::kAlignment;
   o.recovery.budget = p.search_budget;
   o.recovery.interval = p.search_interval;
@@ -71,6 +72,7 @@ std::uint32_t mode_bits(const SessionProfile& p, bool shares_search, bool has_st
   if (!p.plain) bits |= link::kModeSession;
   if (recovers(p) && p.shared_search && shares_search) bits |= link::kModeSharedSearch;
   if (uses_table_focus_stack(p) && has_stack) bits |= link::kModeFocusStack;
+  if (!p.plain && !p.verify) bits |= link::kModeNoVerify;
   if (p.plain && p.motion_filter) bits |= link::kModeMotionFilter;
   if (p.plain && p.refine) bits |= link::kModeRefine;
   if (p.plain && p.recover) bits |= link::kModeRecover;
@@ -86,6 +88,7 @@ SessionProfile profile_from_mode_bits(std::uint32_t bits) noexcept {
   p.plain = (bits & link::kModeSession) == 0;
   p.shared_search = (bits & link::kModeSharedSearch) != 0;
   p.focus_stack = (bits & link::kModeFocusStack) != 0;
+  p.verify = (bits & link::kModeNoVerify) == 0;
   p.motion_filter = p.plain && (bits & link::kModeMotionFilter) != 0;
   p.refine = p.plain && (bits & link::kModeRefine) != 0;
   p.recover = p.plain && (bits & link::kModeRecover) != 0;

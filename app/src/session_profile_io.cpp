@@ -86,6 +86,8 @@ const Key kKeys[] = {
      [](SessionProfile& p, const std::string& v, const std::string& w) { p.shared_search = parse_bool(v, w); }},
     {"focus-stack", [](const SessionProfile& p) { return yes(p.focus_stack); },
      [](SessionProfile& p, const std::string& v, const std::string& w) { p.focus_stack = parse_bool(v, w); }},
+    {"verify", [](const SessionProfile& p) { return yes(p.verify); },
+     [](SessionProfile& p, const std::string& v, const std::string& w) { p.verify = parse_bool(v, w); }},
     {"search-budget", [](const SessionProfile& p) { return std::to_string(p.search_budget); },
      [](SessionProfile& p, const std::string& v, const std::string& w) {
        p.search_budget = static_cast<std::uint32_t>(parse_count(v, w, 0, kSearchPlacementCount - kSearchNear));
@@ -247,6 +249,8 @@ std::vector<Option> session_option_group() {
       {"--search-interval", "N", "search every N-th lost frame, 1..100 (default 1; the frames between only" + indent +
                                      "predict, so a lost period costs about 1/N)"},
       {"--no-focus-stack", "", "ignore the table's model images: depth from the winning stencils only"},
+      {"--no-verify", "", "the vote's choice as it is: no correlation of the model images to decide between" + indent +
+                              "proposals and refine the pose (docs/tracking.md, \"Vote, then verify\")"},
       {"--particles", "N", "--recovery particle (and --tracker particle): particles, 1..1000000 (default 1000)"},
       {"--seed", "S", "--recovery particle (and --tracker particle): the generator's seed (default 1); same" + indent +
                           "seed, same output"},
@@ -275,6 +279,7 @@ SessionProfile read_session_profile(const Args& args) {
   if (args.has("--recovery")) p.recovery = parse_recovery(args.get("--recovery"), "--recovery");
   if (args.has("--subcell")) p.subcell = parse_subcell(args.get("--subcell"), "--subcell");
   if (args.has("--no-focus-stack")) p.focus_stack = false;
+  if (args.has("--no-verify")) p.verify = false;
   number("--search-budget", "search-budget");
   if (args.has("--search-budget") && p.search_budget == 0) throw UsageError("--search-budget '0': want an integer in 1..558");
   number("--search-interval", "search-interval");

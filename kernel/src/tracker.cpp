@@ -79,6 +79,7 @@ const char* track_state_name(TrackState state) noexcept {
     case TrackState::kTracking: return "tracking";
     case TrackState::kUncertain: return "uncertain";
     case TrackState::kLost: return "lost";
+    case TrackState::kAmbiguous: return "ambiguous";
   }
   return "unknown";
 }

@@ -26,12 +26,15 @@ Status TrackingSession::start(const SessionOptions& options, const Pose& initial
       !(options.depth_switch_correlation >= 0.0f && options.depth_switch_correlation <= 2.0f) ||
       !(options.depth_votes_decisive >= 0.0f) || !(options.clutter_floor >= 0.0f && options.clutter_floor <= 1.0f) ||
       options.vote_proposals < 1 || options.vote_proposals > kMaxVoteProposals ||
+      !(options.verify_accept >= 0.0f && options.verify_accept <= 1.0f) ||
+      !(options.ambiguity_margin >= 0.0f && options.ambiguity_margin <= 1.0f) ||
       !(options.verification.spacing_px > 0.0f && options.verification.spacing_px <= 4.0f) ||
       !(options.verification.distinct_px >= 0.0f)) {
     return Status::kInvalidArgument;
   }
   if (coarse_ != nullptr && coarse_->depth_count() != fine_.depth_count()) return Status::kInvalidArgument;
   options_ = options;
+  verified_reference_ = 0.0f;
   pose_ = initial;
   last_confident_ = {initial, {}, 0};
   filter_.reset(options.filter, initial);
@@ -53,17 +56,23 @@ Status TrackingSession::step(const ImageView& image, SessionScratch scratch, Ses
   depth_margin_ = 0.0f;
   ++last_confident_.frames_since;
   verdict_ = Verdict{};
+  verdict_taken_ = false;
   GABARIT_TRY(lost_ ? recover(image, scratch, out) : track_fine(image, scratch, out));
   if (verdict_.found) {
     out.verified_score = verdict_.score;
     out.verified_runner_up = verdict_.runner_up;
+    out.verified = verdict_taken_;
+    out.score = verdict_.score > 0.0f ? verdict_.score : 0.0f;
+    // Two distinct placements alike: say so rather than pick one silently.
+    if (out.state != TrackState::kLost && verdict_.runner_up >= verdict_.score - options_.ambiguity_margin)
+      out.state = TrackState::kAmbiguous;
   }
   out.correlations = verdict_.correlations;
   if (verifying()) {
     // The verified pose is already refined in angle; its depth is the
     // best-correlated stack image there (hysteresis: the current depth stays
     // unless another beats it by the margin).
-    if (verdict_.found && fine_.depth_count() > 1 && out.state != TrackState::kLost &&
+    if (verdict_taken_ && fine_.depth_count() > 1 && out.state != TrackState::kLost &&
         !(depth_margin_ >= options_.depth_votes_decisive)) {
       GABARIT_TRY(depth_by_intensity(image, pose_, *stack_, pose_.depth, options_.depth_switch_correlation));
       out.correlations += fine_.depth_count();
@@ -149,10 +158,21 @@ void TrackingSession::propose_top_cells(std::span<const VoteCounter> counters, c
 }
 
 // Vote, then verify: the best-correlated proposal, refined, replaces
-// `chosen` (which is proposed first, so it wins a tie).
-Status TrackingSession::verify_choice(const ImageView& image, Proposals& proposals, Pose& chosen) noexcept {
-  GABARIT_TRY(verify(image, *stack_, proposals, options_.verification, verdict_));
-  if (verdict_.found) chosen = verdict_.pose;
+// `chosen` (which is proposed first, so it wins a tie) where it correlates
+// at least verify_accept of the reference; confident frames taken so move
+// the reference.
+Status TrackingSession::verify_choice(const ImageView& image, const Proposals& proposals, Confidence confidence,
+                                      Pose& chosen) noexcept {
+  VerifyOptions o = options_.verification;
+  o.refine_angle = o.refine_angle && fine_.axis_theta().cells > 1;  // no angle axis: the motion has no rotation
+  GABARIT_TRY(verify(image, *stack_, proposals, o, verdict_));
+  if (!verdict_.found) return Status::kOk;
+  verdict_taken_ = !(verified_reference_ > 0.0f) || verdict_.score >= options_.verify_accept * verified_reference_;
+  if (!verdict_taken_) return Status::kOk;
+  chosen = verdict_.pose;
+  if (confidence == Confidence::kHigh) {
+    verified_reference_ = verified_reference_ > 0.0f ? 0.9f * verified_reference_ + 0.1f * verdict_.score : verdict_.score;
+  }
   return Status::kOk;
 }
 
@@ -262,10 +282,10 @@ Status TrackingSession::track_fine(const ImageView& image, SessionScratch scratc
     for (std::uint32_t i = 0; i < proposals.count; ++i) all.add(proposals.poses[i]);
     all.add(predicted);
     all.add(pose_);
-    GABARIT_TRY(verify_choice(image, all, chosen));
+    GABARIT_TRY(verify_choice(image, all, confidence, chosen));
     // Where the votes chose the depth clearly, they keep it (edge features
     // tell depths apart better than intensities over a textured object).
-    if (verdict_.found && confidence != Confidence::kNone && m.depth_margin >= options_.depth_votes_decisive)
+    if (verdict_taken_ && confidence != Confidence::kNone && m.depth_margin >= options_.depth_votes_decisive)
       chosen.depth = m.pose.depth;
   }
   if (confidence != Confidence::kNone) {

@@ -49,10 +49,39 @@ Pose moved(const Pose& p, float dx, float dy, float dt) noexcept {
   return q;
 }
 
+// The design's samples in the plane of the angle kept (t = 0): the centre,
+// four along x and y, four on the diagonals.
+bool in_plane(int k) noexcept { return kDesign[k].t == 0; }
+
+// A quadratic c + g.u + u'Hu/2 in x and y fitted by least squares to the
+// nine samples in the plane; its peak as below, the angle's offset 0.
+bool planar_peak(const float (&f)[kSamples], Vector3& peak) noexcept {
+  using Vector6 = Eigen::Matrix<float, 6, 1>;
+  Eigen::Matrix<float, 6, 6> ata = Eigen::Matrix<float, 6, 6>::Zero();
+  Vector6 atf = Vector6::Zero();
+  for (int k = 0; k < kSamples; ++k) {
+    if (!in_plane(k)) continue;
+    const float u = kDesign[k].x, v = kDesign[k].y;
+    Vector6 row;
+    row << 1.0f, u, v, 0.5f * u * u, 0.5f * v * v, u * v;
+    ata += row * row.transpose();
+    atf += row * f[k];
+  }
+  const Vector6 beta = Eigen::LDLT<Eigen::Matrix<float, 6, 6>>(ata).solve(atf);
+  Eigen::Matrix<float, 2, 2> negative_h;
+  negative_h << -beta(3), -beta(5), -beta(5), -beta(4);
+  const Eigen::LDLT<Eigen::Matrix<float, 2, 2>> curvature(negative_h);
+  if (curvature.info() != Eigen::Success || !(curvature.vectorD().minCoeff() > 0.0f)) return false;
+  const Eigen::Matrix<float, 2, 1> uv = curvature.solve(Eigen::Matrix<float, 2, 1>(beta(1), beta(2)));
+  peak = Vector3(uv(0), uv(1), 0.0f);
+  return true;
+}
+
 // A quadratic c + g.u + u'Hu/2 fitted to the 19 samples by least squares;
 // its peak u* = -H^-1 g when H is negative definite, each coordinate clamped
 // to one spacing. False when the samples do not form a peak.
-bool quadratic_peak(const float (&f)[kSamples], Vector3& peak) noexcept {
+bool quadratic_peak(const float (&f)[kSamples], bool with_angle, Vector3& peak) noexcept {
+  if (!with_angle) return planar_peak(f, peak);
   Matrix10 ata = Matrix10::Zero();
   Vector10 atf = Vector10::Zero();
   for (int k = 0; k < kSamples; ++k) {
@@ -90,19 +119,20 @@ bool quadratic_peak(const float (&f)[kSamples], Vector3& peak) noexcept {
 // whose score is `score`: the fitted peak if it scores better than every
 // sample, else the best sample. False (centre unchanged) when a sample falls
 // outside the frame.
-bool refine_round(const ImageView& frame, const FocusStack& stack, float step_px, float step_deg, Pose& centre, float& score,
-                  std::uint32_t& correlations) noexcept {
-  float f[kSamples];
+bool refine_round(const ImageView& frame, const FocusStack& stack, float step_px, float step_deg, bool with_angle, Pose& centre,
+                  float& score, std::uint32_t& correlations) noexcept {
+  float f[kSamples] = {};
   f[0] = score;
   int best = 0;
   for (int k = 1; k < kSamples; ++k) {
+    if (!with_angle && !in_plane(k)) continue;
     const Pose p = moved(centre, kDesign[k].x * step_px, kDesign[k].y * step_px, kDesign[k].t * step_deg);
     ++correlations;
     if (!correlation_at(frame, p, stack, centre.depth, f[k])) return false;
     if (f[k] > f[best]) best = k;
   }
   Vector3 peak;
-  if (quadratic_peak(f, peak)) {
+  if (quadratic_peak(f, with_angle, peak)) {
     const Pose p = moved(centre, peak(0) * step_px, peak(1) * step_px, peak(2) * step_deg);
     float at_peak = 0.0f;
     ++correlations;
@@ -117,6 +147,16 @@ bool refine_round(const ImageView& frame, const FocusStack& stack, float step_px
   return true;
 }
 
+// Keeps x and y within `bound` of `anchor`; true if it moved them.
+bool clamp_near(const Pose& anchor, float bound, Pose& pose) noexcept {
+  const auto clamp = [](float v, float lo, float hi) { return v < lo ? lo : (v > hi ? hi : v); };
+  const float x = clamp(pose.x, anchor.x - bound, anchor.x + bound), y = clamp(pose.y, anchor.y - bound, anchor.y + bound);
+  const bool moved = x != pose.x || y != pose.y;
+  pose.x = x;
+  pose.y = y;
+  return moved;
+}
+
 bool distinct(const Pose& a, const Pose& b, float distance_px) noexcept {
   const float dx = a.x - b.x, dy = a.y - b.y;
   return a.depth != b.depth || dx * dx + dy * dy >= distance_px * distance_px;
@@ -128,7 +168,8 @@ Status verify(const ImageView& frame, const FocusStack& stack, const Proposals& 
               Verdict& out) noexcept {
   out = Verdict{};
   if (!frame.valid() || !valid_focus_stack(stack) || proposals.count > kMaxProposals ||
-      !(options.spacing_px > 0.0f && options.spacing_px <= 4.0f) || !(options.distinct_px >= 0.0f)) {
+      !(options.spacing_px > 0.0f && options.spacing_px <= 4.0f) || !(options.distinct_px >= 0.0f) ||
+      !(options.tie_margin >= 0.0f && options.tie_margin <= 2.0f) || !(options.max_offset_px > 0.0f)) {
     return Status::kInvalidArgument;
   }
   for (std::uint32_t i = 0; i < proposals.count; ++i) {
@@ -146,6 +187,10 @@ Status verify(const ImageView& frame, const FocusStack& stack, const Proposals& 
     }
   }
   if (!out.found) return Status::kOk;
+  if (out.winner != 0 && scored[0] && distinct(proposals.poses[0], proposals.poses[out.winner], options.distinct_px) &&
+      correlation_from_signed_square(scores[0]) >= correlation_from_signed_square(scores[out.winner]) - options.tie_margin) {
+    out.winner = 0;
+  }
   const Pose& won = proposals.poses[out.winner];
   float runner_up = -1.0f;
   for (std::uint32_t i = 0; i < proposals.count; ++i) {
@@ -168,7 +213,11 @@ Status verify(const ImageView& frame, const FocusStack& stack, const Proposals& 
     float step_px = options.spacing_px, step_deg = options.spacing_px / reach * 57.2957795f;
     step_deg = step_deg < 0.1f ? 0.1f : (step_deg > 1.0f ? 1.0f : step_deg);
     for (int round = 0; round < kRefineRounds; ++round, step_px *= 0.5f, step_deg *= 0.5f) {
-      if (!refine_round(frame, fine, step_px, step_deg, pose, fine_score, out.correlations)) break;
+      if (!refine_round(frame, fine, step_px, step_deg, options.refine_angle, pose, fine_score, out.correlations)) break;
+      if (clamp_near(won, options.max_offset_px, pose)) {
+        ++out.correlations;
+        if (!correlation_at(frame, pose, fine, pose.depth, fine_score)) break;
+      }
     }
     if (fine.step != stack.step) {
       ++out.correlations;

@@ -187,7 +187,7 @@ TEST(Protocol, EveryMessageRoundTripsAndEachDecodeErrorHasItsCode) {
   EXPECT_EQ(std::memcmp(&pose2.pose.x, &pose.pose.x, 4), 0);
   EXPECT_EQ(pose2.votes, pose.votes);
   EXPECT_EQ(pose2.cycles, pose.cycles);
-  buf[18] = std::byte{3};  // state 3 is not a TrackState
+  buf[18] = std::byte{4};  // state 4 is not a TrackState (3 is kAmbiguous)
   EXPECT_EQ(decode(std::span(buf, kPoseBytes), pose2), Status::kBadHeaderField);
 
   const std::byte pixels[6] = {};

@@ -385,7 +385,7 @@ Status decode(std::span<const std::byte> payload, PoseReport& m) noexcept {
     m.captured = r.u64();
     m.strobed = r.u64();
   }
-  if (m.state > 2 || m.frame_id == kNoFrame) return Status::kBadHeaderField;
+  if (m.state > 3 || m.frame_id == kNoFrame) return Status::kBadHeaderField;  // TrackState, kAmbiguous the last
   return Status::kOk;
 }
 

@@ -32,7 +32,9 @@
 
 namespace gabarit {
 
-enum class TrackState : std::uint8_t { kTracking = 0, kUncertain = 1, kLost = 2 };
+// kAmbiguous: a verifying session saw two distinct placements correlate
+// alike (tracking_session.hpp); track_step itself never reports it.
+enum class TrackState : std::uint8_t { kTracking = 0, kUncertain = 1, kLost = 2, kAmbiguous = 3 };
 const char* track_state_name(TrackState state) noexcept;
 
 // Side of the square image window that contains the ROI rotated by any angle

@@ -64,7 +64,7 @@ struct SessionOptions {
   // frames in heavy noise, where noise alone scores nearly what the target
   // does (tracking_session.cpp).
   float clutter_floor = 0.5f;
-  // With the motion filter and a focus stack: vote, then verify
+  // With the motion filter, a focus stack and a grayscale detector: vote, then verify
   // (verification.hpp). The frame's pose is the best-correlated of the
   // proposals (the vote's best `vote_proposals` cells at the prediction and
   // at the last pose, the gate's choice, the plain loop's winner, the
@@ -74,21 +74,36 @@ struct SessionOptions {
   bool verify = true;
   std::uint8_t vote_proposals = 4;  // 1..kMaxVoteProposals
   VerifyOptions verification;
+  // The verified pose is taken only where the model is seen well: its
+  // correlation at least this fraction of the reference (the running mean
+  // over confident frames). Partly hidden, the correlation over the model's
+  // rectangle is pulled by the occluder, while the votes, on the edges still
+  // in view, hold the pose.
+  float verify_accept = 0.8f;
+  // Two distinct placements whose correlations are within this margin: the
+  // frame is reported ambiguous (TrackState::kAmbiguous) instead of one being
+  // picked silently.
+  float ambiguity_margin = 0.02f;
 };
 inline constexpr std::uint8_t kMaxVoteProposals = 6;
 // track_step frame after frame, nothing added: the thesis's tracker.
-inline constexpr SessionOptions kPlainSession{false, false, false, {}, {}, false, false, 0.0f, 0.0f, false, 1.0e38f, 0.0f, false, 4, {}};
+inline constexpr SessionOptions kPlainSession{false, false, false, {}, {}, false, false, 0.0f, 0.0f, false, 1.0e38f, 0.0f, false, 4, {}, 0.8f, 0.02f};
 
 struct SessionResult {
   Pose pose;                 // the session's estimate after this frame
   StepResult step;           // the raw vote of the table searched this frame
   Confidence confidence = Confidence::kNone;
   TrackState state = TrackState::kLost;
-  float score = 0.0f;        // normalised score of the chosen cell
-  // Verifying: the chosen pose's correlation with the model image (-1..1),
-  // the best distinct proposal's (-1 without one), and correlations computed.
+  // Verifying (a focus stack and the motion filter): the correlation of the
+  // model image with the frame at the pose, 0..1 (verification.hpp); else the
+  // normalised vote score of the chosen cell.
+  float score = 0.0f;
+  // Verifying: the verified pose's correlation with the model image (-1..1),
+  // the best distinct proposal's (-1 without one), correlations computed,
+  // and whether the verified pose was taken (verify_accept).
   float verified_score = 0.0f, verified_runner_up = -1.0f;
   std::uint32_t correlations = 0;
+  bool verified = false;
   bool searched_coarse = false;
   bool reacquired = false;   // this frame ended a lost period
 };
@@ -141,9 +156,14 @@ class TrackingSession {
   Status track_fine(const ImageView& image, SessionScratch scratch, SessionResult& out) noexcept;
   Status recover(const ImageView& image, SessionScratch scratch, SessionResult& out) noexcept;
   void begin_lost() noexcept;
-  bool verifying() const noexcept { return stack_ != nullptr && options_.verify && options_.motion_filter; }
+  // Binary frames (the thesis's synthetic sequences) have no intensities to
+  // correlate: their votes decide.
+  bool verifying() const noexcept {
+    return stack_ != nullptr && options_.verify && options_.motion_filter &&
+           detector_.kind != table_format::DetectorKind::kBinary;
+  }
   void propose_top_cells(std::span<const VoteCounter> counters, const Pose& centre, Measurement& m) const noexcept;
-  Status verify_choice(const ImageView& image, Proposals& proposals, Pose& chosen) noexcept;
+  Status verify_choice(const ImageView& image, const Proposals& proposals, Confidence confidence, Pose& chosen) noexcept;
 
   const TableView& fine_;
   const TableView* coarse_;
@@ -160,6 +180,8 @@ class TrackingSession {
   std::uint32_t lost_frames_ = 0;  // frames of this lost period so far
   float depth_margin_ = 0.0f;  // this frame's measurement's (0 without one)
   Verdict verdict_;            // verifying: this frame's
+  bool verdict_taken_ = false;  // and whether its pose was taken
+  float verified_reference_ = 0.0f;  // the running mean of confident frames' correlations (0: none yet)
 };
 
 }  // namespace gabarit

@@ -43,6 +43,9 @@ struct Proposals {
 
 struct VerifyOptions {
   bool refine = true;  // sub-pixel x, y and sub-degree angle on the score
+  // The angle refined too; false where the motion has no rotation (a table
+  // without an angle axis): x and y only.
+  bool refine_angle = true;
   // The refinement's first spacing: this many pixels along x and y, and the
   // angle that moves the model's outline (half its larger side from the
   // reference point) by as much, within [0.1, 1] degree.
@@ -50,9 +53,19 @@ struct VerifyOptions {
   // The refinement samples the model at every stack.step-th pixel, or finer
   // until it has at least this many samples (a small model).
   std::uint32_t refine_samples = 4096;
+  // The refined x and y stay within this many pixels of the winning
+  // proposal (a vote's cell is 1 px): where the correlation is flat along a
+  // direction (an elongated object along its axis) the votes' cell, anchored
+  // by edges across it, bounds the slide.
+  float max_offset_px = 0.5f;
   // The runner-up: the best proposal at least this far from the winner
   // (pixels), or at another depth; what tells an ambiguous frame.
   float distinct_px = 2.0f;
+  // Near-ties between distinct placements go to the first proposal (the
+  // caller's own choice, e.g. the one the motion model expects): it wins
+  // while its correlation r is within this margin of a best that lies at
+  // least distinct_px away. A best nearer than that wins outright.
+  float tie_margin = 0.02f;
 };
 
 struct Verdict {

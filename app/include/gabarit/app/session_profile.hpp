@@ -57,6 +57,9 @@ struct SessionProfile {
   // Without plain: depth and angle by intensity with the model images the
   // table carries (format 1.1), when it has them.
   bool focus_stack = true;
+  // Without plain, with the table's model images: vote, then verify (the
+  // best-correlated proposal, refined; docs/tracking.md).
+  bool verify = true;
   // The recovery search (RecoveryOptions): grid placements beyond the nearest
   // 9 per search (0: all), every n-th lost frame, every n-th feature screens a
   // placement; detection recovery after this many lost frames.

@@ -142,6 +142,7 @@ inline constexpr std::uint32_t kModeRecover = 1u << 5;             // ... with r
 inline constexpr std::uint32_t kModeRecoveryDetection = 1u << 6;   // re-acquisition by detection over the frame
 inline constexpr std::uint32_t kModeRecoveryParticles = 1u << 7;   // re-acquisition by a particle filter
 inline constexpr std::uint32_t kModeSubCellAlignment = 1u << 8;    // sub-cell by feature alignment, not the parabola
+inline constexpr std::uint32_t kModeNoVerify = 1u << 9;            // the session without vote-then-verify
 inline constexpr std::uint32_t kModeTuned = 1u << 31;              // numbers other than the defaults: not mirrored
 
 struct Hello {
