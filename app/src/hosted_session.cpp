@@ -18,7 +18,9 @@ const SessionProfile& checked(const SessionProfile& profile) {
 
 HostedSession::HostedSession(const TableView& table, const SessionProfile& profile, SessionExtras extras)
     : table_(table),
-      profile_(checked(profile)),
+      profile_(resolve_recovery(checked(profile), table.has_model_images() &&
+                                                      (extras.detector ? *extras.detector : detector_of(table)).kind !=
+                                                          table_format::DetectorKind::kBinary)),
       extras_(std::move(extras)),
       options_(extras_.research_options ? *extras_.research_options : session_options(profile_)),
       detector_(extras_.detector ? *extras_.detector : detector_of(table)),

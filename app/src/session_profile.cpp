@@ -23,12 +23,19 @@ Status validate(const SessionProfile& p) noexcept {
                        within(p.screen_stride, 1, 16) && within(p.detect_after, 0, 1000) &&
                        within(p.particles, 1, 1000000) && within(p.edge_stride, 1, 64) && within(p.edge_tolerance, 0, 3) &&
                        (p.particle_improvements_off & ~kKnownImprovements) == 0;
-  const bool kinds = static_cast<std::uint8_t>(p.recovery) <= static_cast<std::uint8_t>(RecoveryKind::kParticles) &&
+  const bool kinds = static_cast<std::uint8_t>(p.recovery) <= static_cast<std::uint8_t>(RecoveryKind::kAuto) &&
                      static_cast<std::uint8_t>(p.subcell) <= static_cast<std::uint8_t>(SubCellKind::kAlignment);
   const bool parts = (p.plain || (!p.motion_filter && !p.refine && !p.recover)) &&
-                     (p.recovery == RecoveryKind::kGrid || recovers(p)) &&
+                     (!needs_recovery(p.recovery) || recovers(p)) &&
                      (p.subcell == SubCellKind::kParabola || refines(p));
   return numbers && kinds && parts ? Status::kOk : Status::kInvalidArgument;
+}
+
+SessionProfile resolve_recovery(const SessionProfile& profile, bool verifying_table) noexcept {
+  SessionProfile p = profile;
+  if (p.recovery == RecoveryKind::kAuto)
+    p.recovery = verifying_table && !p.plain && p.verify && p.focus_stack ? RecoveryKind::kDetection : RecoveryKind::kGrid;
+  return p;
 }
 
 SessionOptions session_options(const SessionProfile& p) noexcept {
@@ -92,6 +99,7 @@ SessionProfile profile_from_mode_bits(std::uint32_t bits) noexcept {
   p.motion_filter = p.plain && (bits & link::kModeMotionFilter) != 0;
   p.refine = p.plain && (bits & link::kModeRefine) != 0;
   p.recover = p.plain && (bits & link::kModeRecover) != 0;
+  p.recovery = RecoveryKind::kGrid;  // CAPS carries what runs: auto already resolved
   if ((bits & link::kModeRecoveryDetection) != 0) p.recovery = RecoveryKind::kDetection;
   if ((bits & link::kModeRecoveryParticles) != 0) p.recovery = RecoveryKind::kParticles;
   if ((bits & link::kModeSubCellAlignment) != 0) p.subcell = SubCellKind::kAlignment;

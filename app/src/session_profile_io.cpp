@@ -26,6 +26,7 @@ const char* recovery_name(RecoveryKind kind) {
     case RecoveryKind::kGrid: return "grid";
     case RecoveryKind::kDetection: return "detect";
     case RecoveryKind::kParticles: return "particle";
+    case RecoveryKind::kAuto: return "auto";
   }
   return "grid";
 }
@@ -34,7 +35,8 @@ RecoveryKind parse_recovery(const std::string& text, const std::string& what) {
   if (text == "grid") return RecoveryKind::kGrid;
   if (text == "detect") return RecoveryKind::kDetection;
   if (text == "particle") return RecoveryKind::kParticles;
-  throw UsageError(what + " '" + text + "': want grid, detect or particle");
+  if (text == "auto") return RecoveryKind::kAuto;
+  throw UsageError(what + " '" + text + "': want auto, grid, detect or particle");
 }
 
 SubCellKind parse_subcell(const std::string& text, const std::string& what) {
@@ -141,7 +143,7 @@ std::string_view trim(std::string_view s) {
 // The session's parts that only the thesis's loop can leave out.
 void check(const SessionProfile& p, const std::string& origin) {
   if (validate(p) == Status::kOk) return;
-  if (p.recovery != RecoveryKind::kGrid && !recovers(p))
+  if (needs_recovery(p.recovery) && !recovers(p))
     throw UsageError(origin + "recovery " + recovery_name(p.recovery) + " needs recovery: drop plain or add recover");
   if (p.subcell != SubCellKind::kParabola && !refines(p))
     throw UsageError(origin + "subcell alignment needs refinement: drop plain or add refine");
@@ -235,10 +237,11 @@ std::vector<Option> session_option_group() {
       {"--motion-filter", "", "with --plain: predict the ROI, gate candidates, grade confidence (default on)"},
       {"--refine", "", "with --plain: sub-cell x, y, theta from the neighbouring cells' scores (default on)"},
       {"--recover", "", "with --plain: once lost, search around the last confident pose (default on)"},
-      {"--recovery", "grid|detect|particle", "how the session re-acquires a lost target: the grid search around where it" + indent +
-                                                 "was last seen (default), detection over the whole frame (docs/detection.md)," + indent +
-                                                 "or a particle filter over the whole frame (docs/particle-filter.md)"},
-      {"--detect-after", "N", "--recovery detect: the first N lost frames search with the grid, the later ones" + indent +
+      {"--recovery", "auto|grid|detect|particle", "how the session re-acquires a lost target: the grid search around where" + indent +
+                                                 "it was last seen, detection over the whole frame (docs/detection.md), or a" + indent +
+                                                 "particle filter over the whole frame (docs/particle-filter.md); auto (default):" + indent +
+                                                 "detection with a grayscale table that carries model images, else the grid"},
+      {"--detect-after", "N", "--recovery detect (and auto): the first N lost frames search with the grid, the later ones" + indent +
                                   "by detection (default 2; 0: detection from the first)"},
       {"--subcell", "parabola|alignment", "how refinement places the pose within the cell: a parabola through the" + indent +
                                               "neighbouring cells' scores (default), or a least-squares alignment of the" + indent +
@@ -290,13 +293,13 @@ SessionProfile read_session_profile(const Args& args) {
   number("--edge-stride", "edge-stride");
   number("--edge-tolerance", "edge-tolerance");
   if (args.has("--without")) p.particle_improvements_off = parse_improvements_off(args.get("--without"), "--without");
-  if (p.recovery != RecoveryKind::kDetection && args.has("--detect-after"))
-    throw UsageError("--detect-after applies to --recovery detect");
+  if (p.recovery != RecoveryKind::kDetection && p.recovery != RecoveryKind::kAuto && args.has("--detect-after"))
+    throw UsageError("--detect-after applies to --recovery detect (and auto)");
   for (const char* option : {"--particles", "--seed", "--without", "--edge-stride", "--edge-tolerance"}) {
     if (p.recovery != RecoveryKind::kParticles && args.has(option) && args.get_or("--tracker", "stencil") != "particle")
       throw UsageError(std::string(option) + " applies to --tracker particle and --recovery particle");
   }
-  if (p.recovery != RecoveryKind::kGrid && !recovers(p))
+  if (needs_recovery(p.recovery) && !recovers(p))
     throw UsageError(std::string("--recovery ") + recovery_name(p.recovery) + " needs recovery: drop --plain or add --recover");
   if (p.subcell != SubCellKind::kParabola && !refines(p))
     throw UsageError("--subcell needs refinement: drop --plain or add --refine");

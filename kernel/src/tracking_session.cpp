@@ -27,6 +27,7 @@ Status TrackingSession::start(const SessionOptions& options, const Pose& initial
       !(options.depth_votes_decisive >= 0.0f) || !(options.clutter_floor >= 0.0f && options.clutter_floor <= 1.0f) ||
       options.vote_proposals < 1 || options.vote_proposals > kMaxVoteProposals ||
       !(options.verify_accept >= 0.0f && options.verify_accept <= 1.0f) ||
+      !(options.verify_lost >= 0.0f && options.verify_lost <= 1.0f) ||
       !(options.ambiguity_margin >= 0.0f && options.ambiguity_margin <= 1.0f) ||
       !(options.verification.spacing_px > 0.0f && options.verification.spacing_px <= 4.0f) ||
       !(options.verification.distinct_px >= 0.0f)) {
@@ -64,7 +65,8 @@ Status TrackingSession::step(const ImageView& image, SessionScratch scratch, Ses
     out.verified = verdict_taken_;
     out.score = verdict_.score > 0.0f ? verdict_.score : 0.0f;
     // Two distinct placements alike: say so rather than pick one silently.
-    if (out.state != TrackState::kLost && verdict_.runner_up >= verdict_.score - options_.ambiguity_margin)
+    if (out.state != TrackState::kLost && verdict_.score > 0.0f &&
+        verdict_.runner_up >= (1.0f - options_.ambiguity_margin) * verdict_.score)
       out.state = TrackState::kAmbiguous;
   }
   out.correlations = verdict_.correlations;
@@ -165,6 +167,11 @@ Status TrackingSession::verify_choice(const ImageView& image, const Proposals& p
                                       Pose& chosen) noexcept {
   VerifyOptions o = options_.verification;
   o.refine_angle = o.refine_angle && fine_.axis_theta().cells > 1;  // no angle axis: the motion has no rotation
+  // Another placement, for near-ties and ambiguity: at least a sixth of the
+  // model image's smaller side away (a broad correlation peak is one place).
+  const ImageView& model = stack_->images[0];
+  const float apart = static_cast<float>(model.width < model.height ? model.width : model.height) / 6.0f;
+  if (apart > o.distinct_px) o.distinct_px = apart;
   GABARIT_TRY(verify(image, *stack_, proposals, o, verdict_));
   if (!verdict_.found) return Status::kOk;
   verdict_taken_ = !(verified_reference_ > 0.0f) || verdict_.score >= options_.verify_accept * verified_reference_;
@@ -265,8 +272,7 @@ Status TrackingSession::track_fine(const ImageView& image, SessionScratch scratc
   out.step = m.step;
   out.score = m.score;
   depth_margin_ = m.depth_margin;
-  const Confidence confidence = m.confidence;
-  if (confidence != Confidence::kNone) static_cast<void>(filter_.grade(m.score, m.next_score));  // moves the reference score
+  Confidence confidence = m.confidence;
   // No measurement the filter trusts: partly hidden, the target still wins
   // the plain loop's vote, so follow that (never worse than the thesis's
   // loop); the filter only predicts, and if it stays unsure the target is
@@ -287,7 +293,14 @@ Status TrackingSession::track_fine(const ImageView& image, SessionScratch scratc
     // tell depths apart better than intensities over a textured object).
     if (verdict_taken_ && confidence != Confidence::kNone && m.depth_margin >= options_.depth_votes_decisive)
       chosen.depth = m.pose.depth;
+    // Lost is declared from the verified score, not from the votes: where
+    // the best proposal correlates below verify_lost of the reference, there
+    // is no measurement to trust (the filter coasts, and declares the target
+    // lost if it stays so).
+    if (verdict_.found && verified_reference_ > 0.0f && verdict_.score < options_.verify_lost * verified_reference_)
+      confidence = Confidence::kNone;
   }
+  if (confidence != Confidence::kNone) static_cast<void>(filter_.grade(m.score, m.next_score));  // moves the reference score
   if (confidence != Confidence::kNone) {
     // The angle is measured even where the votes barely constrain it (only
     // its sub-cell offset is dropped): left out of the filter, its velocity
@@ -329,11 +342,25 @@ Status TrackingSession::recover(const ImageView& image, SessionScratch scratch, 
                          filter_.classify(out.score, normalised_score(out.step.runner_up)) == Confidence::kHigh &&
                          !clutter_rejects(out.score, out.step);
   out.confidence = confident ? Confidence::kHigh : Confidence::kNone;
-  if (confident) {
-    SubCellOffset o;
-    if (options_.refine) o = refine_within_cell(fine_, scratch.fine.counters, out.step.best.cell);
-    pose_ = pose_of_cell(fine_, out.step.best.cell, found.from, out.step.roi_centre_x, out.step.roi_centre_y, o.x, o.y,
-                         o.theta_deg);
+  if (!confident) return Status::kOk;
+  SubCellOffset o;
+  if (options_.refine) o = refine_within_cell(fine_, scratch.fine.counters, out.step.best.cell);
+  Pose found_pose = pose_of_cell(fine_, out.step.best.cell, found.from, out.step.roi_centre_x, out.step.roi_centre_y, o.x, o.y,
+                                 o.theta_deg);
+  if (verifying() && verified_reference_ > 0.0f) {
+    // Verifying, the target is found again only where the model correlates
+    // as well as a tracked frame must (verify_accept of the reference): a
+    // look-alike that wins a vote does not.
+    Proposals candidate;
+    candidate.add(found_pose);
+    GABARIT_TRY(verify_choice(image, candidate, Confidence::kNone, found_pose));
+    if (!verdict_taken_) {
+      out.confidence = Confidence::kNone;
+      return Status::kOk;
+    }
+  }
+  {
+    pose_ = found_pose;
     filter_.restart(pose_);
     lost_ = false;
     out.reacquired = true;

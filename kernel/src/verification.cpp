@@ -36,8 +36,6 @@ constexpr Offset kDesign[19] = {{0, 0, 0},  {1, 0, 0},  {-1, 0, 0}, {0, 1, 0},  
 constexpr int kSamples = 19;
 constexpr int kRefineRounds = 3;
 
-using Vector10 = Eigen::Matrix<float, 10, 1>;
-using Matrix10 = Eigen::Matrix<float, 10, 10>;
 using Vector3 = Eigen::Matrix<float, 3, 1>;
 using Matrix3 = Eigen::Matrix<float, 3, 3>;
 
@@ -53,59 +51,18 @@ Pose moved(const Pose& p, float dx, float dy, float dt) noexcept {
 // four along x and y, four on the diagonals.
 bool in_plane(int k) noexcept { return kDesign[k].t == 0; }
 
-// A quadratic c + g.u + u'Hu/2 in x and y fitted by least squares to the
-// nine samples in the plane; its peak as below, the angle's offset 0.
-bool planar_peak(const float (&f)[kSamples], Vector3& peak) noexcept {
-  using Vector6 = Eigen::Matrix<float, 6, 1>;
-  Eigen::Matrix<float, 6, 6> ata = Eigen::Matrix<float, 6, 6>::Zero();
-  Vector6 atf = Vector6::Zero();
-  for (int k = 0; k < kSamples; ++k) {
-    if (!in_plane(k)) continue;
-    const float u = kDesign[k].x, v = kDesign[k].y;
-    Vector6 row;
-    row << 1.0f, u, v, 0.5f * u * u, 0.5f * v * v, u * v;
-    ata += row * row.transpose();
-    atf += row * f[k];
-  }
-  const Vector6 beta = Eigen::LDLT<Eigen::Matrix<float, 6, 6>>(ata).solve(atf);
-  Eigen::Matrix<float, 2, 2> negative_h;
-  negative_h << -beta(3), -beta(5), -beta(5), -beta(4);
-  const Eigen::LDLT<Eigen::Matrix<float, 2, 2>> curvature(negative_h);
-  if (curvature.info() != Eigen::Success || !(curvature.vectorD().minCoeff() > 0.0f)) return false;
-  const Eigen::Matrix<float, 2, 1> uv = curvature.solve(Eigen::Matrix<float, 2, 1>(beta(1), beta(2)));
-  peak = Vector3(uv(0), uv(1), 0.0f);
-  return true;
-}
-
-// A quadratic c + g.u + u'Hu/2 fitted to the 19 samples by least squares;
-// its peak u* = -H^-1 g when H is negative definite, each coordinate clamped
-// to one spacing. False when the samples do not form a peak.
-bool quadratic_peak(const float (&f)[kSamples], bool with_angle, Vector3& peak) noexcept {
-  if (!with_angle) return planar_peak(f, peak);
-  Matrix10 ata = Matrix10::Zero();
-  Vector10 atf = Vector10::Zero();
-  for (int k = 0; k < kSamples; ++k) {
-    const float u = kDesign[k].x, v = kDesign[k].y, w = kDesign[k].t;
-    Vector10 row;
-    row << 1.0f, u, v, w, 0.5f * u * u, 0.5f * v * v, 0.5f * w * w, u * v, u * w, v * w;
-    ata += row * row.transpose();
-    atf += row * f[k];
-  }
-  const Eigen::LDLT<Matrix10> fit(ata);
-  const Vector10 beta = fit.solve(atf);
-  Matrix3 negative_h;
-  negative_h << -beta(4), -beta(7), -beta(8), -beta(7), -beta(5), -beta(9), -beta(8), -beta(9), -beta(6);
-  const Vector3 g(beta(1), beta(2), beta(3));
-  const Eigen::LDLT<Matrix3> curvature(negative_h);
-  if (curvature.info() == Eigen::Success && curvature.vectorD().minCoeff() > 0.0f) {
+// The peak u* = -H^-1 g of a quadratic c + g.u + u'Hu/2 when H is negative
+// definite, each coordinate clamped to one spacing; false otherwise.
+bool newton_peak(const Matrix3& negative_h, const Vector3& g, int dims, Vector3& peak) noexcept {
+  if (dims == 3) {
+    const Eigen::LDLT<Matrix3> curvature(negative_h);
+    if (curvature.info() != Eigen::Success || !(curvature.vectorD().minCoeff() > 0.0f)) return false;
     peak = curvature.solve(g);  // -H u = g
   } else {
-    // No peak in all three (a near-circular outline has none along the
-    // angle): the peak in x and y with the angle kept, if there is one there.
     const Eigen::Matrix<float, 2, 2> h2 = negative_h.topLeftCorner<2, 2>();
-    const Eigen::LDLT<Eigen::Matrix<float, 2, 2>> planar(h2);
-    if (planar.info() != Eigen::Success || !(planar.vectorD().minCoeff() > 0.0f)) return false;
-    const Eigen::Matrix<float, 2, 1> uv = planar.solve(g.head<2>());
+    const Eigen::LDLT<Eigen::Matrix<float, 2, 2>> curvature(h2);
+    if (curvature.info() != Eigen::Success || !(curvature.vectorD().minCoeff() > 0.0f)) return false;
+    const Eigen::Matrix<float, 2, 1> uv = curvature.solve(g.head<2>());
     peak = Vector3(uv(0), uv(1), 0.0f);
   }
   for (int i = 0; i < 3; ++i) {
@@ -113,6 +70,47 @@ bool quadratic_peak(const float (&f)[kSamples], bool with_angle, Vector3& peak) 
     peak(i) = peak(i) > 1.0f ? 1.0f : (peak(i) < -1.0f ? -1.0f : peak(i));
   }
   return true;
+}
+
+// A quadratic c + g.u + u'Hu/2 fitted by least squares to the design's
+// samples: all 19 (`with_angle`) or the nine in the plane. The design is
+// fixed and symmetric, so the normal equations have a closed form (no
+// matrix to factor): each gradient term is sum(u f) / sum(u^2), each cross
+// term sum(u v f) / 4 (the four diagonal samples), and the constant and the
+// three curvatures solve a 4 x 4 (3 x 3 in the plane) system solved by hand
+// below. Its peak as newton_peak; where there is none in all three (a
+// near-circular outline has none along the angle), the peak in x and y.
+bool quadratic_peak(const float (&f)[kSamples], bool with_angle, Vector3& peak) noexcept {
+  float s0 = 0.0f, sx = 0.0f, sy = 0.0f, sz = 0.0f;  // sum f, sum u^2 f, sum v^2 f, sum w^2 f
+  Vector3 g = Vector3::Zero();
+  float xy = 0.0f, xz = 0.0f, yz = 0.0f;  // sum u v f, ...
+  for (int k = 0; k < kSamples; ++k) {
+    if (!with_angle && !in_plane(k)) continue;
+    const float u = kDesign[k].x, v = kDesign[k].y, w = kDesign[k].t;
+    s0 += f[k];
+    sx += u * u * f[k], sy += v * v * f[k], sz += w * w * f[k];
+    g(0) += u * f[k], g(1) += v * f[k], g(2) += w * f[k];
+    xy += u * v * f[k], xz += u * w * f[k], yz += v * w * f[k];
+  }
+  float qx = 0.0f, qy = 0.0f, qz = 0.0f;  // half the curvatures
+  if (with_angle) {
+    // Normal equations [19 10 10 10; 10 10 4 4; 10 4 10 4; 10 4 4 10] (c, qx, qy, qz) = (s0, sx, sy, sz).
+    g /= 10.0f;
+    const float t = sx + sy + sz, c = (9.0f * s0 - 5.0f * t) / 21.0f, q = (s0 - 19.0f * c) / 10.0f;
+    qx = q / 3.0f + (2.0f * sx - sy - sz) / 18.0f;
+    qy = q / 3.0f + (2.0f * sy - sx - sz) / 18.0f;
+    qz = q / 3.0f + (2.0f * sz - sx - sy) / 18.0f;
+  } else {
+    // Normal equations [9 6 6; 6 6 4; 6 4 6] (c, qx, qy) = (s0, sx, sy).
+    g /= 6.0f;
+    const float q = (sx + sy - (4.0f / 3.0f) * s0) / 2.0f;
+    qx = 0.5f * (q + 0.5f * (sx - sy));
+    qy = 0.5f * (q - 0.5f * (sx - sy));
+  }
+  Matrix3 negative_h;
+  negative_h << -2.0f * qx, -xy / 4.0f, -xz / 4.0f, -xy / 4.0f, -2.0f * qy, -yz / 4.0f, -xz / 4.0f, -yz / 4.0f, -2.0f * qz;
+  if (with_angle && newton_peak(negative_h, g, 3, peak)) return true;
+  return newton_peak(negative_h, g, 2, peak);
 }
 
 // One round of refinement at spacing (step_px, step_deg) around `centre`,

@@ -22,6 +22,7 @@ namespace gabarit::mcu {
 inline constexpr app::SessionProfile kFirmwareProfile = [] {
   app::SessionProfile p;
   p.shared_search = false;
+  p.recovery = app::RecoveryKind::kGrid;  // no room for a finder
   return p;
 }();
 static_assert(kFirmwareProfile.recovery == app::RecoveryKind::kGrid, "the firmware holds the grid search only");

@@ -98,7 +98,7 @@ TEST(SessionProfile, ValidateRefusesWhatNoSessionRuns) {
   EXPECT_TRUE(bad([](SessionProfile& p) { p.particle_improvements_off = 1u << 9; }));
   EXPECT_TRUE(bad([](SessionProfile& p) { p.refine = true; }));  // a part added to the full session
   EXPECT_TRUE(bad([](SessionProfile& p) { p.plain = true, p.recovery = RecoveryKind::kParticles; }));
-  EXPECT_TRUE(bad([](SessionProfile& p) { p.recovery = static_cast<RecoveryKind>(3); }));
+  EXPECT_TRUE(bad([](SessionProfile& p) { p.recovery = static_cast<RecoveryKind>(4); }));
 }
 
 TEST(SessionProfile, OptionsAreTheKernelsDefaultsAndThePlainLoop) {
@@ -162,8 +162,34 @@ TEST(SessionProfile, CommandLineGroupReadsIntoTheProfileOnce) {
   ASSERT_TRUE(refused.parse({"--plain", "--recovery", "particle"}));
   EXPECT_THROW((void)read_session_profile(refused), UsageError);
   Args stray("t", "", "", session_option_group());
-  ASSERT_TRUE(stray.parse({"--detect-after", "3"}));
+  ASSERT_TRUE(stray.parse({"--recovery", "grid", "--detect-after", "3"}));
   EXPECT_THROW((void)read_session_profile(stray), UsageError);
+  // The default (auto) may detect: --detect-after applies to it.
+  Args by_default("t", "", "", session_option_group());
+  ASSERT_TRUE(by_default.parse({"--detect-after", "3"}));
+  EXPECT_EQ(read_session_profile(by_default).recovery, RecoveryKind::kAuto);
+}
+
+// Auto recovery is detection where the session verifies, the grid elsewhere
+// (a binary table, the plain loop, verification off).
+TEST(SessionProfile, AutoRecoveryIsDetectionWhereTheSessionVerifies) {
+  const SessionProfile d;
+  EXPECT_EQ(d.recovery, RecoveryKind::kAuto);
+  EXPECT_EQ(resolve_recovery(d, true).recovery, RecoveryKind::kDetection);
+  EXPECT_EQ(resolve_recovery(d, false).recovery, RecoveryKind::kGrid);
+  SessionProfile plain = d;
+  plain.plain = true;
+  EXPECT_EQ(validate(plain), Status::kOk);
+  EXPECT_EQ(resolve_recovery(plain, true).recovery, RecoveryKind::kGrid);
+  SessionProfile unverified = d;
+  unverified.verify = false;
+  EXPECT_EQ(resolve_recovery(unverified, true).recovery, RecoveryKind::kGrid);
+  SessionProfile particles = d;
+  particles.recovery = RecoveryKind::kParticles;
+  EXPECT_EQ(resolve_recovery(particles, true).recovery, RecoveryKind::kParticles);
+  // CAPS carries the resolved kind: read back, the grid stays the grid.
+  EXPECT_EQ(profile_from_mode_bits(mode_bits(resolve_recovery(d, false), true, true)).recovery, RecoveryKind::kGrid);
+  EXPECT_EQ(profile_from_mode_bits(mode_bits(resolve_recovery(d, true), true, true)).recovery, RecoveryKind::kDetection);
 }
 
 // The firmware's static twin and the hosted session, on the same grayscale

@@ -155,7 +155,7 @@ $g track --recovery particle --table "$s/t.gbt" --frames "$s/frames.y4m" --init 
 $g eval --gt "$s/gt.csv" --poses "$s/pr.csv" > "$s/acc_pr.json" || fail "eval --recovery particle"
 grep -q '"reacquired_after_frames": \[[0-9]' "$s/acc_pr.json" || fail "--recovery particle: not reacquired after the occlusion: $(cat "$s/acc_pr.json")"
 expect 2 "needs recovery" $g track --recovery particle --plain --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init"
-expect 2 "want grid, detect or particle" $g track --recovery kalman --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init"
+expect 2 "want auto, grid, detect or particle" $g track --recovery kalman --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init"
 # Detection (docs/detection.md): the model found anywhere with no pose, in
 # every frame; tracking without --init; re-acquisition by detection.
 $g detect --table "$s/t.gbt" "$s/frames.y4m" -o "$s/det.csv" 2>/dev/null || fail "detect"
@@ -190,7 +190,7 @@ expect 2 "want one IMAGE" $g detect --table "$s/t.gbt"
 expect 2 "want A <= B" $g detect --table "$s/t.gbt" --theta-range 5:1 "$s/model_00.pgm"
 expect 2 "--min-score" $g detect --table "$s/t.gbt" --min-score 2 "$s/model_00.pgm"
 expect 2 "at least --max-count" $g detect --table "$s/t.gbt" --max-count 9 --candidates 3 "$s/model_00.pgm"
-expect 2 "apply to detection" $g track --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init" --min-score 0.4
+expect 2 "apply to detection" $g track --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init" --recovery grid --min-score 0.4
 expect 2 "need --init" $g track --tracker particle --table "$s/t.gbt" --frames "$s/frames.y4m"
 expect 1 "cannot open" $g detect --table "$s/t.gbt" "$s/missing.pgm"
 $g synth --pipette-suite --scenes 1 --frames 3 -o "$work/pipettes" 2>/dev/null || fail "synth --pipette-suite"

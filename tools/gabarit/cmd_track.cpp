@@ -84,6 +84,8 @@ host::TrackingOptions read_tracking(const app::Args& args, const TableView& tabl
   if (args.has("--focus-stack") && args.has("--no-focus-stack")) throw app::UsageError("give one of --focus-stack and --no-focus-stack");
   options.profile = app::read_session_profile(args);
   if (options.threads > 1) options.profile.plain = true;
+  if (options.threads > 1 && options.profile.recovery == app::RecoveryKind::kAuto) options.profile.recovery = app::RecoveryKind::kGrid;
+  if (args.has("--coarse") && options.profile.recovery == app::RecoveryKind::kAuto) options.profile.recovery = app::RecoveryKind::kGrid;
   if (options.threads > 1 && options.profile.recovery != app::RecoveryKind::kGrid)
     throw app::UsageError("--threads applies to the plain loop, not --recovery " + args.get("--recovery"));
   if (args.has("--coarse")) {
@@ -99,6 +101,7 @@ host::TrackingOptions read_tracking(const app::Args& args, const TableView& tabl
   }
   options.detect_first = !args.has("--init");
   if ((args.has("--theta-range") || args.has("--min-score")) && options.profile.recovery != app::RecoveryKind::kDetection &&
+      options.profile.recovery != app::RecoveryKind::kAuto &&
       !options.detect_first)
     throw app::UsageError("--theta-range and --min-score apply to detection: without --init, or with --recovery detect");
   if (options.detect_first && options.threads > 1) throw app::UsageError("--tracker particle and --threads need --init");

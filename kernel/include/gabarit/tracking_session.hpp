@@ -80,14 +80,18 @@ struct SessionOptions {
   // rectangle is pulled by the occluder, while the votes, on the edges still
   // in view, hold the pose.
   float verify_accept = 0.8f;
-  // Two distinct placements whose correlations are within this margin: the
-  // frame is reported ambiguous (TrackState::kAmbiguous) instead of one being
-  // picked silently.
+  // Below this fraction of the reference, the frame has no measurement (the
+  // motion filter coasts and declares the target lost if it stays so).
+  float verify_lost = 0.5f;
+  // A distinct placement (a sixth of the model image's smaller side away, at
+  // least verification.distinct_px) correlating within this fraction of the
+  // chosen one: the frame is reported ambiguous (TrackState::kAmbiguous)
+  // instead of one being picked silently.
   float ambiguity_margin = 0.02f;
 };
 inline constexpr std::uint8_t kMaxVoteProposals = 6;
 // track_step frame after frame, nothing added: the thesis's tracker.
-inline constexpr SessionOptions kPlainSession{false, false, false, {}, {}, false, false, 0.0f, 0.0f, false, 1.0e38f, 0.0f, false, 4, {}, 0.8f, 0.02f};
+inline constexpr SessionOptions kPlainSession{false, false, false, {}, {}, false, false, 0.0f, 0.0f, false, 1.0e38f, 0.0f, false, 4, {}, 0.8f, 0.5f, 0.02f};
 
 struct SessionResult {
   Pose pose;                 // the session's estimate after this frame

@@ -23,6 +23,10 @@ enum class RecoveryKind : std::uint8_t {
   kGrid = 0,       // the grid search around where it was last seen (recovery_search.hpp)
   kDetection = 1,  // detection over the whole frame after detect_after lost frames (model_finder.hpp)
   kParticles = 2,  // a particle filter over the whole frame (particle_recovery.hpp)
+  // The default: detection where the session verifies (a table with model
+  // images and a grayscale detector, not the plain loop), else the grid.
+  // A session resolves it once (resolve_recovery) before it runs.
+  kAuto = 3,
 };
 // How refinement places the pose within the cell (SessionOptions::align_features).
 enum class SubCellKind : std::uint8_t { kParabola = 0, kAlignment = 1 };
@@ -49,7 +53,7 @@ struct SessionProfile {
   bool motion_filter = false;  // with plain: the motion filter, with its own defaults
   bool refine = false;         // with plain: sub-cell refinement
   bool recover = false;        // with plain: recovery once lost
-  RecoveryKind recovery = RecoveryKind::kGrid;
+  RecoveryKind recovery = RecoveryKind::kAuto;
   SubCellKind subcell = SubCellKind::kParabola;
   // The grid search detects features once per lost frame (SessionScratch::
   // search_features); false: a full track_step per placement.
@@ -98,6 +102,13 @@ SessionOptions session_options(const SessionProfile& profile) noexcept;
 inline bool recovers(const SessionProfile& p) noexcept { return !p.plain || p.recover; }
 inline bool refines(const SessionProfile& p) noexcept { return !p.plain || p.refine; }
 inline bool uses_table_focus_stack(const SessionProfile& p) noexcept { return !p.plain && p.focus_stack; }
+// Recovery kinds that need the session's recovery on (auto and the grid do not:
+// without recovery they are nothing).
+inline bool needs_recovery(RecoveryKind k) noexcept { return k == RecoveryKind::kDetection || k == RecoveryKind::kParticles; }
+// The profile with RecoveryKind::kAuto made concrete for a table: detection
+// where the session verifies (`verifying_table`: model images and a
+// grayscale detector) and recovers, else the grid.
+SessionProfile resolve_recovery(const SessionProfile& profile, bool verifying_table) noexcept;
 
 // The HIL link's form (CAPS.mode, link/protocol.hpp's kMode* bits): a device
 // reports the profile it runs, as the choices take effect on its table
