@@ -359,14 +359,12 @@ Status TrackingSession::recover(const ImageView& image, SessionScratch scratch, 
       return Status::kOk;
     }
   }
-  {
-    pose_ = found_pose;
-    filter_.restart(pose_);
-    lost_ = false;
-    out.reacquired = true;
-    out.state = TrackState::kUncertain;
-    out.pose = pose_;
-  }
+  pose_ = found_pose;
+  filter_.restart(pose_);
+  lost_ = false;
+  out.reacquired = true;
+  out.state = TrackState::kUncertain;
+  out.pose = pose_;
   return Status::kOk;
 }
 
