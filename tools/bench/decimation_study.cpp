@@ -351,6 +351,14 @@ void report_policy_summary(const std::vector<StudyShape>& shapes, const std::vec
 
 }
 
+// The rest of a table's header after "| policy |": one column per keep.
+void keep_columns(const std::vector<double>& keeps, std::ostringstream& md) {
+  for (double k : keeps) md << ' ' << keep_label(k) << " |";
+  md << "\n|---|";
+  for (std::size_t i = 0; i < keeps.size(); ++i) md << "---:|";
+  md << '\n';
+}
+
 // One shape: the highest noise every sequence frame is exact up to, and the
 // one-step trials', per policy and keep; the default policy's bytes and
 // time per keep; its heat maps.
@@ -359,10 +367,7 @@ void report_shape(const DecimationStudyOptions& o, const StudyShape& s, const st
                   const std::vector<SequenceRow>& seq, const GridSpec& spec, std::ostringstream& md) {
   md << "\n## `" << s.shape.name << "`: continuous sequences (" << s.sequence_frames
      << " frames), highest noise with every frame exact\n\n| policy |";
-  for (double k : keeps) md << ' ' << keep_label(k) << " |";
-  md << "\n|---|";
-  for (std::size_t i = 0; i < keeps.size(); ++i) md << "---:|";
-  md << '\n';
+  keep_columns(keeps, md);
   for (const auto& p : policies) {
     md << "| " << p.name << " |";
     for (double k : keeps) {
@@ -374,10 +379,7 @@ void report_shape(const DecimationStudyOptions& o, const StudyShape& s, const st
     md << '\n';
   }
   md << "\nOne-step trials (" << spec.frames << " per point), highest noise with no wrong frame:\n\n| policy |";
-  for (double k : keeps) md << ' ' << keep_label(k) << " |";
-  md << "\n|---|";
-  for (std::size_t i = 0; i < keeps.size(); ++i) md << "---:|";
-  md << '\n';
+  keep_columns(keeps, md);
   for (const auto& p : policies) {
     md << "| " << p.name << " |";
     const std::string name = host::describe(p.policy);
