@@ -76,6 +76,7 @@ Accuracy evaluate(const std::vector<PoseSample>& poses, const std::vector<PoseSa
   double sum = 0, sum_deg = 0;
   bool hidden_before = false;
   int pending = -1;  // frames since the last return to visibility, while not reacquired
+  bool on_target = true;  // the previous visible frame within 5 px (true before the first)
   for (const PoseSample& t : truth) {
     if (!t.visible) {
       hidden_before = true;
@@ -103,6 +104,9 @@ Accuracy evaluate(const std::vector<PoseSample>& poses, const std::vector<PoseSa
     }
     if (e <= 1.0) ++a.within_1px;
     if (e <= 2.0) ++a.within_2px;
+    if (e <= 5.0) ++a.within_5px;
+    if (e > 5.0 && on_target) ++a.failures;
+    on_target = e <= 5.0;
     const double de = std::fabs(it->second->theta_deg - t.theta_deg);
     sum_deg += de;
     a.max_error_deg = std::max(a.max_error_deg, de);
@@ -127,6 +131,7 @@ std::string accuracy_json(const Accuracy& a) {
   std::ostringstream o;
   o << "{\n  \"frames\": " << a.frames << ",\n  \"exact\": " << a.exact << ",\n  \"wrong\": " << a.wrong_frames.size()
     << ",\n  \"missing\": " << a.missing << ",\n  \"within_1px\": " << a.within_1px << ",\n  \"within_2px\": " << a.within_2px
+    << ",\n  \"within_5px\": " << a.within_5px << ",\n  \"failures\": " << a.failures
     << ",\n  \"mean_error_px\": " << a.mean_error_px << ",\n  \"max_error_px\": " << a.max_error_px
     << ",\n  \"within_1deg\": " << a.within_1deg << ",\n  \"mean_error_deg\": " << a.mean_error_deg
     << ",\n  \"max_error_deg\": " << a.max_error_deg << ",\n  \"depth_exact\": " << a.depth_exact

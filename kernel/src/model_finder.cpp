@@ -521,22 +521,4 @@ Status ModelFinder::find(const ImageView& image, const FinderOptions& options, F
   return Status::kOk;
 }
 
-Status DetectionRecovery::run(const ImageView& image, TrackerScratch fine, SearchResult& out) noexcept {
-  out = SearchResult{};
-  const std::uint32_t n = lost_frames_++;
-  if (n % interval_ != 0) return Status::kOk;
-  FinderOptions one = options_;
-  one.max_count = 1;
-  FinderScratch s = scratch_;
-  s.fine = fine;
-  Detection found[1];
-  std::uint32_t count = 0;
-  GABARIT_TRY(finder_.find(image, one, s, found, count));
-  out.searched = true;
-  if (count == 0) return Status::kOk;  // out.vote stays empty: nothing to accept
-  last_ = found[0];
-  out.from = found[0].pose;
-  return track_step(finder_.table(), finder_.detector(), image, out.from, fine, out.vote);
-}
-
 }  // namespace gabarit

@@ -41,6 +41,7 @@ Status TrackingSession::start(const SessionOptions& options, const Pose& initial
   filter_.reset(options.filter, initial);
   search_.reset();
   lost_ = false;
+  surveyed_ = false;
   return Status::kOk;
 }
 
@@ -58,6 +59,10 @@ Status TrackingSession::step(const ImageView& image, SessionScratch scratch, Ses
   ++last_confident_.frames_since;
   verdict_ = Verdict{};
   verdict_taken_ = false;
+  if (!surveyed_ && detection_ != nullptr && verifying()) {
+    surveyed_ = true;
+    GABARIT_TRY(detection_->survey(image, pose_, scratch.fine));
+  }
   GABARIT_TRY(lost_ ? recover(image, scratch, out) : track_fine(image, scratch, out));
   if (verdict_.found) {
     out.verified_score = verdict_.score;
@@ -280,6 +285,7 @@ Status TrackingSession::track_fine(const ImageView& image, SessionScratch scratc
   Pose chosen = confidence != Confidence::kNone ? m.pose
                 : options_.follow_when_unsure && plain.state != TrackState::kLost ? plain.pose
                                                                                    : predicted;
+  bool verified_only = false;  // a measurement by the verified score alone
   if (verifying()) {
     // The session's own choice first, then the votes' other proposals.
     Proposals all;
@@ -299,8 +305,14 @@ Status TrackingSession::track_fine(const ImageView& image, SessionScratch scratc
     // lost if it stays so).
     if (verdict_.found && verified_reference_ > 0.0f && verdict_.score < options_.verify_lost * verified_reference_)
       confidence = Confidence::kNone;
+    // And the other way: where the votes are too weak to trust (a dimmed
+    // frame's edges fall below the detector's thresholds) but the verified
+    // pose correlates as a tracked frame must, that is a measurement.
+    verified_only = confidence == Confidence::kNone && verdict_taken_ && verified_reference_ > 0.0f;
+    if (verified_only) confidence = Confidence::kIntermediate;
   }
-  if (confidence != Confidence::kNone) static_cast<void>(filter_.grade(m.score, m.next_score));  // moves the reference score
+  // Only the votes' own measurements move the votes' reference score.
+  if (confidence != Confidence::kNone && !verified_only) static_cast<void>(filter_.grade(m.score, m.next_score));
   if (confidence != Confidence::kNone) {
     // The angle is measured even where the votes barely constrain it (only
     // its sub-cell offset is dropped): left out of the filter, its velocity
@@ -326,7 +338,7 @@ Status TrackingSession::recover(const ImageView& image, SessionScratch scratch, 
   // set the pose's depth from clutter.
   const std::uint32_t lost_frame = lost_frames_++;
   if (detection_ != nullptr && lost_frame >= options_.recovery.detect_after) {
-    GABARIT_TRY(detection_->run(image, scratch.fine, found));
+    GABARIT_TRY(detection_->run(image, last_confident_, scratch.fine, found));
   } else if (particles_ != nullptr) {
     GABARIT_TRY(particles_->run(image, last_confident_, scratch.fine, found));
   } else {

@@ -230,6 +230,13 @@ expect 2 "is also an input" $g track --table "$s/t.gbt" --frames "$s/frames.y4m"
   --save-profile "$s/run.profile"
 expect 2 "applies to --scene" $g synth --shape curve --depths 3 -o "$work/x"
 expect 2 "one of --shape, --scene, --suite and --pipette-suite" $g synth -o "$work/x"
+expect 2 "--light '1.5': want SWING" $g synth --scene cog --light 1.5 -o "$work/x"
+expect 2 "--light '0.3:0': want SWING" $g synth --scene cog --light 0.3:0 -o "$work/x"
+expect 2 "--sensor-noise and --clean contradict" $g synth --scene cog --clean --sensor-noise 4 -o "$work/x"
+expect 2 "--distractor applies to --scene" $g synth --shape curve --distractor -o "$work/x"
+$g synth --scene small --distractor --light 0.5:60 --sensor-noise 12 --max-turn 1.2 --motion spin --frames 3 -o "$work/fam" 2> "$work/fam.err" \
+  || fail "synth --scene small with the family options"
+grep -q "small-gravel-spin-cover-d1-noise12-turn1.2-light0.5:60-twin-s1, 3 frames 640x480" "$work/fam.err" || fail "synth: family options not in the scene's name"
 expect 2 "--translations" $g tables build --model "$s/model_00.pgm" --x 0:0:1 --y 0:0:1 --translations middle -o "$work/x.gbt"
 
 # Hardening: outputs never clobber inputs or a previous output, inputs are

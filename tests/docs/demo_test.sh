@@ -15,7 +15,8 @@ grep -Eq '^thesis shape, 30% noise: [0-9]+/300 frames on the exact pixel' "$work
 grep -Eq '^grayscale 4-DOF scene .*: over [0-9]+ visible frames [0-9.]+% within 1 px' "$work/out" ||
   { echo "FAIL: demo.sh did not print the 4-DOF scene's summary"; exit 1; }
 grep -Eq 'per frame: [0-9.]+ us mean' "$work/out" || { echo "FAIL: demo.sh printed no timing"; exit 1; }
-for f in $(sed -n 's/^files: //p' "$work/out"); do
+grep -Eq '^\| gabarit default session \| [0-9.]+% ' "$work/out" || { echo "FAIL: demo.sh printed no suite summary"; exit 1; }
+for f in $(sed -n 's/^files: //p' "$work/out" | tr ' ' '\n'); do
   [ -s "$f" ] || { echo "FAIL: demo.sh lists $f but did not write it"; exit 1; }
 done
 bash "$src/tools/scripts/demo.sh" --bogus > /dev/null 2>&1 && { echo "FAIL: demo.sh accepted --bogus"; exit 1; }

@@ -2,10 +2,12 @@
 // target at any place and angle, nothing found where there is nothing,
 // errors for bad input, determinism, and a session re-acquiring by detection
 // a target that reappears beyond the grid search's reach.
+#include "gabarit/detection_recovery.hpp"
 #include "gabarit/model_finder.hpp"
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <vector>
@@ -169,17 +171,67 @@ int reacquire(const Rig& rig, bool detection, float rx, float ry, int budget = 1
 
 TEST(DetectionRecovery, FindsATargetThatReappearsFarAway) {
   const Rig rig;
-  // 200 px and 40 deg from where it was lost: beyond the grid's reach.
-  EXPECT_EQ(reacquire(rig, false, 260, 250), -1);
-  const int frames = reacquire(rig, true, 260, 250);
+  // 71 px and 40 deg from where it was lost, 12 frames before: beyond the
+  // grid's reach, within the table's (12 frames of 5.7 px).
+  EXPECT_EQ(reacquire(rig, false, 110, 110), -1);
+  const int frames = reacquire(rig, true, 110, 110);
   EXPECT_GE(frames, 1);
   EXPECT_LE(frames, 3);
   // The first detect_after lost frames search with the grid only: far
   // away, detection then finds it later, and never if it never starts.
-  EXPECT_EQ(reacquire(rig, true, 260, 250, 10, 1000), -1);
-  const int later = reacquire(rig, true, 260, 250, 30, 20);
+  EXPECT_EQ(reacquire(rig, true, 110, 110, 10, 1000), -1);
+  const int later = reacquire(rig, true, 110, 110, 30, 20);
   EXPECT_GT(later, frames + 2);
   EXPECT_LE(later, 24);
+}
+
+// 276 px away: the table bounds a frame's motion to 5.7 px (x and y within
+// +-4), so the target cannot be there until about 49 frames after it was
+// last seen; it is taken then, not before.
+TEST(DetectionRecovery, TakesATargetOnlyWhereItCanHaveGotTo) {
+  const Rig rig;
+  const double bound = std::hypot(4.0, 4.0), distance = std::hypot(200.0, 190.0);
+  // Last seen in the 4th frame; the reappearance's frame f (from 1) is
+  // 12 + f frames after it.
+  const int reachable = static_cast<int>(std::ceil(distance / bound)) - 1 - 12;
+  const int frames = reacquire(rig, true, 260, 250, 60);
+  EXPECT_GE(frames, reachable);
+  EXPECT_LE(frames, reachable + 3);
+}
+
+// A frame holding the rig's model twice: at (x, y, theta) and at the copy's place.
+app::GrayImage twins(const Rig& rig, float x, float y, float theta, float cx, float cy, float ctheta) {
+  app::GrayImage a = testing::draw_points(rig.points, x, y, theta, kSide);
+  const app::GrayImage b = testing::draw_points(rig.points, cx, cy, ctheta, kSide);
+  for (std::size_t i = 0; i < a.pixels.size(); ++i) a.pixels[i] = std::max(a.pixels[i], b.pixels[i]);
+  return a;
+}
+
+TEST(DetectionRecovery, ALookalikeSeenBoundsWhereTheTargetIsTakenAgain) {
+  Finding t;
+  auto& [rig, finder, options, buffers, fine] = t;
+  DetectionRecovery stage(finder, options, buffers.scratch(fine.view()));
+  // Surveyed with a copy 184 px off: the reach is at most half that.
+  const Pose target{80, 80, 0, 0};
+  ASSERT_EQ(stage.survey(twins(rig, 80, 80, 0, 220, 200, 30).view(), target, fine.view()), Status::kOk);
+  EXPECT_NEAR(stage.lookalike_distance_squared(), 140.0f * 140 + 120 * 120, 200.0f);
+  const LastSighting last{target, {}, 1000};  // long lost: the table's bound alone would reach anywhere
+  EXPECT_TRUE(stage.within_reach(last, {150, 140, 0, 0}));
+  EXPECT_FALSE(stage.within_reach(last, {160, 150, 0, 0}));
+  EXPECT_FALSE(stage.within_reach(last, {220, 200, 30, 0}));
+  // The copy alone (the target hidden) is not taken ...
+  SearchResult found;
+  const app::GrayImage copy_only = testing::draw_points(rig.points, 220, 200, 30, kSide);
+  ASSERT_EQ(stage.run(copy_only.view(), last, fine.view(), found), Status::kOk);
+  EXPECT_TRUE(found.searched);
+  EXPECT_EQ(found.vote.best.votes, 0u);
+  // ... the target, back near where it was, is, though the copy is there too.
+  ASSERT_EQ(stage.run(twins(rig, 100, 95, 10, 220, 200, 30).view(), last, fine.view(), found), Status::kOk);
+  EXPECT_LE(std::hypot(found.from.x - 100, found.from.y - 95), 2.0);
+  // Without a survey nothing bounds the reach but the table.
+  DetectionRecovery fresh(finder, options, buffers.scratch(fine.view()));
+  EXPECT_EQ(fresh.lookalike_distance_squared(), 0.0f);
+  EXPECT_TRUE(fresh.within_reach(last, {220, 200, 30, 0}));
 }
 
 }  // namespace

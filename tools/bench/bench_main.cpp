@@ -91,6 +91,7 @@ struct Options {
   std::uint32_t particles = 1000;
   bool decimation = false;
   std::uint32_t scenes = 0;
+  std::uint32_t first = 0;
   bool no_peer = false;
 };
 
@@ -425,8 +426,8 @@ int run(const Options& o) {
 constexpr const char* kHelp =
     "usage: gabarit bench [--quick] [--out DIR] [--threads N] [--frames N] [--timing-frames N]\n"
     "       gabarit bench --microscope [--quick] [--out DIR]\n"
-    "       gabarit bench --suite [--quick] [--out DIR] [--scenes N] [--frames N] [--no-peer] [--no-particles] [--no-detection]\n"
-    "                     [--orientation-channels N] [--detect-after N]\n"
+    "       gabarit bench --suite [--quick] [--out DIR] [--first I] [--scenes N] [--frames N] [--no-peer] [--no-particles]\n"
+    "                     [--no-detection] [--orientation-channels N] [--detect-after N]\n"
     "       gabarit bench --decimation [--quick] [--out DIR] [--threads N]\n"
     "       gabarit bench --pipette [--quick] [--out DIR] [--frames N] [--particles N]\n"
     "       gabarit bench --regression-csv FILE\n\n"
@@ -444,7 +445,9 @@ constexpr const char* kHelp =
     "                        filter, refinement, recovery, OpenCV NCC bank, 2-thread voting, 4-DOF build time\n"
     "  --suite               the scene suite instead (docs/scene-suite.md): the default session, the plain\n"
     "                        loop and the OpenCV NCC bank per scene, median and worst scene per half\n"
-    "                        (tuning / held out), mean and p99 us/frame; --scenes (default 32, quick 8),\n"
+    "                        (tuning / held out), mean and p99 us/frame; --first I starts at scene I (32: the\n"
+    "                        families), --scenes N runs N of them (default: to the last, 42 in all; quick:\n"
+    "                        every 5th, 9 scenes of both halves),\n"
     "                        --frames per scene (default 160, quick 60), --no-peer skips the NCC bank,\n"
     "                        --no-particles the particle filter, --no-detection the detection rows (gabarit\n"
     "                        detect and OpenCV's pyramid matchTemplate on every frame, re-acquisition by detection);\n"
@@ -508,6 +511,8 @@ int main(int argc, char** argv) {
         o.decimation = true;
       } else if (a == "--scenes") {
         o.scenes = static_cast<std::uint32_t>(count(1, 1000));
+      } else if (a == "--first") {
+        o.first = static_cast<std::uint32_t>(count(0, 999));
       } else if (a == "--no-peer") {
         o.no_peer = true;
       } else if (a == "--no-particles") {
@@ -531,14 +536,15 @@ int main(int argc, char** argv) {
       throw gabarit::app::Error("give one of --microscope, --suite, --decimation and --pipette");
     if (o.pipette) return run_pipette({o.out, o.quick, static_cast<std::uint32_t>(o.grid_frames), o.particles});
     if (o.decimation) return run_decimation_study({o.out, o.quick, o.threads});
-    if ((o.scenes || o.no_peer || o.no_particles || o.no_detection) && !o.suite)
-      throw gabarit::app::Error("--scenes, --no-peer, --no-particles and --no-detection apply to --suite");
+    if ((o.scenes || o.first || o.no_peer || o.no_particles || o.no_detection) && !o.suite)
+      throw gabarit::app::Error("--first, --scenes, --no-peer, --no-particles and --no-detection apply to --suite");
     if (o.microscope) return run_microscope(o.out, o.quick);
     if (o.suite) {
       SuiteOptions s;
       s.out = o.out;
       s.quick = o.quick;
       s.scenes = o.scenes;
+      s.first = o.first;
       s.frames = static_cast<std::uint32_t>(o.grid_frames);
       s.peer = !o.no_peer;
       s.particles = !o.no_particles;

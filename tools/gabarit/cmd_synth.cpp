@@ -21,7 +21,7 @@ E scene_choice(const app::Args& args, const char* option, E fallback, const char
   return out;
 }
 
-constexpr const char* kObjects = "microscope, cog, coin, horse, pipette, cat, astronaut, cup, large or glass-pipette";
+constexpr const char* kObjects = "microscope, cog, coin, horse, pipette, cat, astronaut, cup, large, glass-pipette or small";
 
 int synth_scene(const app::Args& args) {
   for (const char* shape_only : {"--points", "--max-step", "--noise"})
@@ -38,7 +38,23 @@ int synth_scene(const app::Args& args) {
   o.seed = static_cast<std::uint64_t>(args.integer("--seed", 1, 0, INT64_MAX));
   o.frames = static_cast<std::uint32_t>(args.integer("--frames", o.frames, 1, 100000));
   o.depths = static_cast<std::uint16_t>(args.integer("--depths", 1, 1, 32));
-  if (args.has("--clean")) o.noise_sigma = 0.0, o.illumination = 0.0, o.blur_every = 0;
+  if (args.has("--clean")) {
+    for (const char* option : {"--sensor-noise", "--light"})
+      if (args.has(option)) throw app::UsageError(std::string(option) + " and --clean contradict each other");
+    o.noise_sigma = 0.0, o.illumination = 0.0, o.blur_every = 0;
+  }
+  o.noise_sigma = args.number("--sensor-noise", o.noise_sigma, 0.0, 100.0);
+  o.max_turn_deg = args.number("--max-turn", o.max_turn_deg, 0.0, 10.0);
+  o.distractor = args.has("--distractor");
+  if (args.has("--light")) {
+    double swing = 0, period = o.illumination_period;
+    char tail = 0;
+    const int n = std::sscanf(args.get("--light").c_str(), "%lf:%lf%c", &swing, &period, &tail);
+    if ((n != 1 && n != 2) || !(swing >= 0 && swing < 1) || !(period >= 1 && period <= 1e6))
+      throw app::UsageError("--light '" + args.get("--light") + "': want SWING[:PERIOD], SWING in [0, 1), PERIOD >= 1 frame");
+    o.illumination = swing;
+    o.illumination_period = period;
+  }
   if (args.has("--occlusion")) {
     unsigned start = 0, count = 0;
     char tail = 0;
@@ -70,7 +86,7 @@ int synth_suite(const app::Args& args, bool pipette) {
   const auto count = static_cast<std::uint32_t>(args.integer("--scenes", all, 1, pipette ? all : 1000));
   const auto frames = static_cast<std::uint32_t>(args.integer("--frames", pipette ? 200 : 160, 1, 100000));
   const std::filesystem::path dir(args.get("-o"));
-  std::string listing = "index,name,half,object,background,motion,occlusion_side,depths,stack,seed,frames,visible,width,height\n";
+  std::string listing = "index,name,half,object,background,motion,occlusion_side,depths,stack,seed,frames,visible,width,height,family\n";
   for (std::uint32_t i = 0; i < count; ++i) {
     const host::SceneOptions o = pipette ? host::pipette_scene(i, frames) : host::suite_scene(i, frames);
     const bool held_out = pipette ? host::pipette_held_out(i) : host::suite_held_out(i);
@@ -81,7 +97,8 @@ int synth_suite(const app::Args& args, bool pipette) {
                host::name_of(o.object) + "," + host::name_of(o.background) + "," + host::name_of(o.motion) + "," +
                host::name_of(o.occlusion_side) + "," + std::to_string(o.depths) + "," + host::name_of(o.stack) + "," +
                std::to_string(o.seed) + "," + std::to_string(o.frames) + "," + std::to_string(s.visible_frames) + "," +
-               std::to_string(s.width) + "," + std::to_string(s.height) + "\n";
+               std::to_string(s.width) + "," + std::to_string(s.height) + "," +
+               (pipette ? "pipette" : host::name_of(host::suite_family(i))) + "\n";
     std::fprintf(stderr, "\r%s: scene %u/%u %-40s", dir.c_str(), i + 1, count, host::scene_name(o).c_str());
   }
   app::write_file((dir / "suite.csv").string(), listing);
@@ -102,12 +119,13 @@ int synth(const std::vector<std::string>& argv) {
             "background, with an illumination change, sensor noise, motion-blurred frames and an occlusion.\n"
             "Outputs DIR/frames.y4m, DIR/gt.csv and the model stack DIR/model_NN.pgm. Deterministic per seed.\n"
             "--scene OBJECT: the same with another object, background, motion and occlusion (docs/scene-suite.md).\n"
-            "--suite: the scene suite, DIR/00 .. DIR/31 (half for tuning, half held out) and DIR/suite.csv.\n"
+            "--suite: the scene suite, DIR/00 .. DIR/41 (half for tuning, half held out) and DIR/suite.csv.\n"
             "--pipette-suite: the 8 glass-pipette scenes of gabarit bench --pipette (docs/particle-filter.md).",
             {{"--shape", "SRC", "random | curve (thesis ~194 points) | watch (~2800 edge points of a Debian\n"
               "                          photograph) | photo:FILE.pgm | points CSV (x,y relative to the reference)"},
              {"--scene", "OBJECT", "the grayscale 4-DOF scene instead of a point shape: microscope (the cog over\n"
-              "                          gravel), cog, coin, horse, pipette, cat, astronaut, cup, large, glass-pipette"},
+              "                          gravel), cog, coin, horse, pipette, cat, astronaut, cup, large, glass-pipette,\n"
+              "                          small (36x32 px in a 640x480 frame)"},
              {"--background", "NAME", "--scene: gravel (default), grass, brick, moon, page, smooth"},
              {"--motion", "NAME", "--scene: smooth (default), walk (velocity random walk, reversing at the margins),\n"
               "                          stopgo, spin (~1.2 deg/frame), sweep (depth steps every 6 frames);\n"
@@ -116,10 +134,14 @@ int synth(const std::vector<std::string>& argv) {
              {"--occlusion-side", "SIDE", "--scene: cover (default: all at once), left, right, top, bottom (sliding in), none"},
              {"--stack", "KIND", "--scene: tilted (default: no two depths alike) or alike (two middle depths nearly equal)"},
              {"--clean", "", "--scene: no sensor noise, illumination change or motion blur (sub-pixel accuracy checks)"},
+             {"--sensor-noise", "SIGMA", "--scene: Gaussian sensor noise in grey levels (default 3)"},
+             {"--light", "SWING[:PERIOD]", "--scene: the gain swings within 1 +- SWING every PERIOD frames (default 0.2:300)"},
+             {"--max-turn", "DEG", "--scene: largest turn per frame (default 1; spin turns 1.2 times this)"},
+             {"--distractor", "", "--scene: a look-alike copy of the object orbiting close by (not in gt.csv)"},
              {"--suite", "", "the scene suite (fixed scenes; --frames and --scenes apply)"},
              {"--pipette-suite", "", "the glass-pipette scenes (fixed; 0-3 tuning, 4-7 held out; --frames, default 200,\n"
               "                          and --scenes apply)"},
-             {"--scenes", "N", "--suite: the first N scenes (default 32)"},
+             {"--scenes", "N", "--suite: the first N scenes (default 42)"},
              {"--depths", "N", "--scene: focus-stack depths of the tilted object, 1..32 (default 1)"},
              {"--occlusion", "START:FRAMES", "--scene: frames hidden behind another photograph (default 100:18; 0:0 none)"},
              {"--points", "N", "approximate point count for random (default 194) and photo: (default 2800)"},
@@ -136,7 +158,8 @@ int synth(const std::vector<std::string>& argv) {
     throw app::UsageError("--scenes applies to --suite and --pipette-suite");
   if (args.has("--suite") || args.has("--pipette-suite")) return synth_suite(args, args.has("--pipette-suite"));
   if (args.has("--scene")) return synth_scene(args);
-  for (const char* scene_only : {"--depths", "--occlusion", "--background", "--occlusion-side", "--stack", "--clean"})
+  for (const char* scene_only : {"--depths", "--occlusion", "--background", "--occlusion-side", "--stack", "--clean", "--sensor-noise",
+                                  "--light", "--max-turn", "--distractor"})
     if (args.has(scene_only)) throw app::UsageError(std::string(scene_only) + " applies to --scene");
   host::SynthOptions o;
   o.seed = static_cast<std::uint64_t>(args.integer("--seed", 1, 0, INT64_MAX));

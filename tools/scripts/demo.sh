@@ -9,16 +9,22 @@
 #     stack), a table over x, y +-5 px, theta +-1.5 deg and its 3 depths;
 #   - each tracked with gabarit track's defaults (the tracking session) and
 #     compared with the ground truth,
-# printing accuracy and per-frame time. Output stays in build/demo/.
+# printing accuracy and per-frame time; then the scene suite
+# (docs/scene-suite.md: gabarit bench --suite, the default session beside
+# the plain loop and the OpenCV NCC bank), printing its summary tables.
+# Output stays in build/demo/.
 #
-# Usage: demo.sh [--gabarit PATH] [--out DIR]
+# Usage: demo.sh [--gabarit PATH] [--out DIR] [--full-suite]
 #   --gabarit PATH  use this gabarit as it is: no install, no build
 #                   (the docs.demo test runs the demo so)
 #   --out DIR       write into DIR (new or empty) instead of build/demo
+#   --full-suite    all 42 scenes of 160 frames (a few minutes) instead of
+#                   the quick suite (every 5th scene, 60 frames each)
 set -euo pipefail
-g="" out=""
+g="" out="" suite=--quick
 while [ $# -gt 0 ]; do
   case "$1" in
+    --full-suite) suite=""; shift ;;
     --gabarit) g=$(realpath "${2:?--gabarit needs a path}"); shift 2 ;;
     --out) out=$(realpath -m "${2:?--out needs a folder}"); shift 2 ;;
     -h|--help) sed -n '2,/^set -euo/p' "$0" | sed '$d; s/^# \{0,1\}//'; exit 0 ;;
@@ -75,3 +81,13 @@ print(f"grayscale 4-DOF scene (cog, gravel, random walk, occluder from the left,
 print(f"  per frame: {timing(s)}")
 print(f"files: {out}/poses.csv {out}/stats.json {out}/accuracy.json {out}/scene-poses.csv {out}/scene-stats.json {out}/scene-accuracy.json")
 PY
+# The scene suite: gabarit bench runs gabarit-bench, built only with OpenCV (its peer).
+if $g bench --help > /dev/null 2>&1; then
+  $g bench --suite $suite --no-particles --no-detection --out "$out/suite" 2> "$out/suite.log"
+  echo
+  echo "scene suite ($out/suite/suite.md):"
+  sed -n '/^## Summary/,/^## Per scene/p' "$out/suite/suite.md" | sed '1d;$d'
+  echo "files: $out/suite/suite.md $out/suite/suite-scenes.csv"
+else
+  echo "scene suite: skipped (gabarit bench needs gabarit-bench, built with libopencv-imgproc-dev)"
+fi

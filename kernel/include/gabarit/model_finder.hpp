@@ -169,28 +169,4 @@ class ModelFinder {
   const FocusStack* stack_ = nullptr;
 };
 
-// Re-acquisition by detection: a TrackingSession given this stage
-// (use_detection_recovery) searches lost frames with the finder over the
-// whole frame instead of the grid around the last sighting, every
-// `interval`-th lost frame. The best detection is voted once more with the
-// table from its pose (its counters stay in the session's fine scratch), and
-// the session accepts that vote by the rule it applies to every search.
-class DetectionRecovery {
- public:
-  // finder must outlive the stage; scratch.fine is ignored (the session's is used).
-  DetectionRecovery(ModelFinder& finder, const FinderOptions& options, FinderScratch scratch, std::uint32_t interval = 1) noexcept
-      : finder_(finder), options_(options), scratch_(scratch), interval_(interval < 1 ? 1 : interval) {}
-  void reset() noexcept { lost_frames_ = 0; }
-  [[nodiscard]] Status run(const ImageView& image, TrackerScratch fine, SearchResult& out) noexcept;
-  const Detection& last() const noexcept { return last_; }
-
- private:
-  ModelFinder& finder_;
-  FinderOptions options_;
-  FinderScratch scratch_;
-  std::uint32_t interval_ = 1;
-  std::uint32_t lost_frames_ = 0;
-  Detection last_;
-};
-
 }  // namespace gabarit

@@ -17,6 +17,7 @@
 #include <span>
 
 #include "gabarit/depth_by_intensity.hpp"
+#include "gabarit/detection_recovery.hpp"
 #include "gabarit/model_finder.hpp"
 #include "gabarit/motion_filter.hpp"
 #include "gabarit/particle_recovery.hpp"
@@ -132,7 +133,9 @@ class TrackingSession {
   // With a detection stage (model_finder.hpp; must outlive the session;
   // nullptr to stop), lost frames after the first recovery.detect_after
   // re-acquire by detection over the whole frame; its result is accepted by
-  // the same rule. It takes precedence over a particle stage.
+  // the same rule. It takes precedence over a particle stage. Verifying, the
+  // session's first frame is surveyed with it for look-alikes of the target
+  // (DetectionRecovery::survey), which bound where it re-acquires.
   void use_detection_recovery(DetectionRecovery* stage) noexcept { detection_ = stage; }
 
   const Pose& pose() const noexcept { return pose_; }
@@ -182,6 +185,7 @@ class TrackingSession {
   ParticleRecovery* particles_ = nullptr;
   DetectionRecovery* detection_ = nullptr;
   std::uint32_t lost_frames_ = 0;  // frames of this lost period so far
+  bool surveyed_ = false;          // the first frame searched for look-alikes
   float depth_margin_ = 0.0f;  // this frame's measurement's (0 without one)
   Verdict verdict_;            // verifying: this frame's
   bool verdict_taken_ = false;  // and whether its pose was taken

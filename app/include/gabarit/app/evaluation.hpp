@@ -27,6 +27,11 @@ struct Accuracy {
   std::size_t exact = 0;           // |dx| < 0.5 and |dy| < 0.5 (the right pixel)
   std::size_t within_1px = 0;      // Euclidean error <= 1 px
   std::size_t within_2px = 0;
+  std::size_t within_5px = 0;
+  // Failures (VOT-style): visible frames more than 5 px off whose previous
+  // visible frame was within 5 px (or that are the first visible frame):
+  // each time the track is lost, counted once.
+  std::size_t failures = 0;
   std::size_t missing = 0;         // visible truth frames with no pose row
   double mean_error_px = 0;
   double max_error_px = 0;

@@ -15,6 +15,7 @@
 #include "gabarit/app/image_io.hpp"
 #include "gabarit/app/scratch.hpp"
 #include "gabarit/app/session_profile.hpp"
+#include "gabarit/detection_recovery.hpp"
 #include "gabarit/model_finder.hpp"
 #include "gabarit/particle_recovery.hpp"
 #include "gabarit/table_view.hpp"

@@ -155,6 +155,12 @@ ObjectImage make_object(SceneObject which) {
       o.grey = downscaled(photo("coffee"), 280, 205, 3, o.half);
       mask(ellipse(66, 53));
       break;
+    case SceneObject::kSmall:
+      // The cameraman's hand and camera, 4x box-downscaled into a 36x32 ellipse.
+      begin(18);
+      o.grey = downscaled(photo("camera"), 300, 170, 4, o.half);
+      mask(ellipse(18, 16));
+      break;
     case SceneObject::kLarge: {
       begin(100);
       o.grey = downscaled(photo("camera"), 256, 190, 1, o.half);

@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <sstream>
+#include <utility>
 
 #include "gabarit/app/error.hpp"
 #include "gabarit/app/files.hpp"
@@ -82,7 +83,7 @@ std::vector<Pose4> scene_path(const SceneOptions& o, double margin, const SceneP
       clock += moving ? 1.6 : 0.0;
     }
   } else if (o.motion == SceneMotion::kSpin) {
-    const double rate = (rng.next_unit() < 0.5 ? -1.0 : 1.0) * 1.2;
+    const double rate = (rng.next_unit() < 0.5 ? -1.0 : 1.0) * 1.2 * o.max_turn_deg;
     for (std::uint32_t f = 0; f <= o.frames; ++f) {
       path[f] = smooth.at(static_cast<double>(f) - 1.0);
       path[f].theta = rate * (static_cast<double>(f) - 1.0);
@@ -127,6 +128,42 @@ double paint_occluder(Plane& frame, const Plane& cover, const Plane& brick, cons
   return total > 0 ? covered / total : 1;
 }
 
+// The look-alike copy of the object at frame f: it orbits the target once
+// every 200 frames (direction `turn`), its distance swinging between just
+// clear of it (two radii and 6 px) and four radii every 70 frames, at the
+// target's angle plus up to 25 deg. Where the orbit leaves the image, the
+// offset is mirrored in x, y or both, and failing that drawn nearer (down
+// to just clear of the target); where nothing fits, it is not drawn.
+void paint_distractor(Plane& frame, const Layer& layer, const Pose4& target, std::uint32_t f, int radius, double phase, double turn,
+                      double margin, double gain) {
+  const double near = 2.0 * radius + 6, far = 4.0 * radius;
+  const double orbit = near + (far - near) * (0.5 + 0.5 * std::cos(2 * kPi * f / 70.0));
+  const double angle = phase + turn * 2 * kPi * f / 200.0;
+  const double theta = target.theta + 25 * std::sin(2 * kPi * f / 110.0);
+  for (double distance = orbit; distance >= near - 1e-9; distance -= 0.1 * (far - near)) {
+    const double dx = distance * std::cos(angle), dy = distance * std::sin(angle);
+    for (const auto& [sx, sy] : {std::pair{1, 1}, {-1, 1}, {1, -1}, {-1, -1}}) {
+      const double x = target.x + sx * dx, y = target.y + sy * dy;
+      if (x >= margin && y >= margin && x <= frame.w - margin && y <= frame.h - margin) {
+        composite(frame, layer, x, y, theta, gain);
+        return;
+      }
+    }
+  }
+}
+
+// The frame quantised to 8 bits with Gaussian noise of `sigma` grey levels
+// (Box-Muller from the project's generator: the same noise on every machine).
+app::GrayImage with_sensor_noise(const Plane& frame, double sigma, app::Rng& rng) {
+  app::GrayImage out(static_cast<std::uint32_t>(frame.w), static_cast<std::uint32_t>(frame.h));
+  for (std::size_t i = 0; i < out.pixels.size(); ++i) {
+    const double u1 = std::max(rng.next_unit(), 1e-12), u2 = rng.next_unit();
+    const double n = sigma * std::sqrt(-2 * std::log(u1)) * std::cos(2 * kPi * u2);
+    out.pixels[i] = static_cast<std::uint8_t>(std::clamp(std::lround(frame.v[i] + n), 0L, 255L));
+  }
+  return out;
+}
+
 }  // namespace
 
 
@@ -141,6 +178,7 @@ const char* name_of(SceneObject v) noexcept {
     case SceneObject::kAstronaut: return "astronaut";
     case SceneObject::kCup: return "cup";
     case SceneObject::kLarge: return "large";
+    case SceneObject::kSmall: return "small";
   }
   return "?";
 }
@@ -177,10 +215,22 @@ const char* name_of(OcclusionSide v) noexcept {
   return "?";
 }
 const char* name_of(FocusStackKind v) noexcept { return v == FocusStackKind::kTilted ? "tilted" : "alike"; }
+const char* name_of(SceneFamily v) noexcept {
+  switch (v) {
+    case SceneFamily::kMixed: return "mixed";
+    case SceneFamily::kSmallObject: return "small-object";
+    case SceneFamily::kFastSpin: return "fast-spin";
+    case SceneFamily::kDeepStack: return "deep-stack";
+    case SceneFamily::kIllumination: return "illumination";
+    case SceneFamily::kDistractor: return "distractor";
+  }
+  return "?";
+}
 
 bool parse_scene_name(const std::string& s, SceneObject& out) {
   using O = SceneObject;
-  return parse_from(s, out, std::array{O::kCog, O::kCoin, O::kHorse, O::kPipette, O::kCat, O::kAstronaut, O::kCup, O::kLarge, O::kGlassPipette});
+  return parse_from(s, out, std::array{O::kCog, O::kCoin, O::kHorse, O::kPipette, O::kCat, O::kAstronaut, O::kCup, O::kLarge, O::kGlassPipette,
+                                          O::kSmall});
 }
 bool parse_scene_name(const std::string& s, SceneBackground& out) {
   using B = SceneBackground;
@@ -203,6 +253,7 @@ void default_scene_size(SceneObject object, std::uint32_t& width, std::uint32_t&
     case SceneObject::kLarge: width = 704, height = 528; return;
     case SceneObject::kPipette: width = 640, height = 480; return;
     case SceneObject::kGlassPipette: width = 640, height = 480; return;
+    case SceneObject::kSmall: width = 640, height = 480; return;
     case SceneObject::kHorse: case SceneObject::kCup: width = 512, height = 384; return;
     default: width = 384, height = 288; return;
   }
@@ -212,10 +263,70 @@ std::string scene_name(const SceneOptions& o) {
   std::string s = std::string(name_of(o.object)) + "-" + name_of(o.background) + "-" + name_of(o.motion) + "-" +
                   name_of(o.occlusion_side) + "-d" + std::to_string(o.depths);
   if (o.depths > 1 && o.stack == FocusStackKind::kAlike) s += "alike";
+  // What departs from the defaults every mixed scene shares.
+  const SceneOptions defaults;
+  char extra[64];
+  if (o.noise_sigma != defaults.noise_sigma) std::snprintf(extra, sizeof extra, "-noise%g", o.noise_sigma), s += extra;
+  if (o.max_turn_deg != defaults.max_turn_deg) std::snprintf(extra, sizeof extra, "-turn%g", o.max_turn_deg), s += extra;
+  if (o.illumination != defaults.illumination || o.illumination_period != defaults.illumination_period)
+    std::snprintf(extra, sizeof extra, "-light%g:%g", o.illumination, o.illumination_period), s += extra;
+  if (o.distractor) s += "-twin";
   return s + "-s" + std::to_string(o.seed);
 }
 
+namespace {
+
+// Scene `index` of a family (index >= kSuiteMixedScenes): the family's
+// difficulty on a scene otherwise like the mixed ones; the two scenes of a
+// family differ in object, background, motion and occlusion side.
+SceneOptions family_scene(std::uint32_t index, std::uint32_t frames) {
+  SceneOptions o;
+  o.seed = index + 1;
+  o.frames = frames;
+  o.width = o.height = 0;
+  const bool second = (index - kSuiteMixedScenes) % 2 == 1;
+  o.occlusion_side = second ? OcclusionSide::kRight : OcclusionSide::kCover;
+  o.occlusion_start = 50 + (index * 7) % 30;
+  o.occlusion_frames = 12;
+  o.background = second ? SceneBackground::kGrass : SceneBackground::kGravel;
+  o.motion = second ? SceneMotion::kSmooth : SceneMotion::kWalk;
+  switch (suite_family(index)) {
+    case SceneFamily::kMixed:
+    case SceneFamily::kSmallObject:
+      o.object = SceneObject::kSmall;
+      o.background = second ? SceneBackground::kPage : SceneBackground::kGravel;
+      break;
+    case SceneFamily::kFastSpin:
+      o.object = second ? SceneObject::kCat : SceneObject::kCog;
+      o.motion = SceneMotion::kSpin;
+      o.max_turn_deg = 1.2;  // 1.44 deg/frame
+      o.noise_sigma = 12;
+      break;
+    case SceneFamily::kDeepStack:
+      o.object = second ? SceneObject::kCog : SceneObject::kCoin;
+      o.depths = 7;
+      o.motion = second ? SceneMotion::kSweep : SceneMotion::kSmooth;
+      break;
+    case SceneFamily::kIllumination:
+      o.object = second ? SceneObject::kHorse : SceneObject::kAstronaut;
+      o.illumination = 0.5;
+      o.illumination_period = 60;
+      o.background = second ? SceneBackground::kMoon : SceneBackground::kBrick;
+      break;
+    case SceneFamily::kDistractor:
+      o.object = second ? SceneObject::kAstronaut : SceneObject::kCog;
+      o.distractor = true;
+      o.motion = second ? SceneMotion::kStopGo : SceneMotion::kSmooth;
+      o.width = 512, o.height = 384;  // room for the two
+      break;
+  }
+  return o;
+}
+
+}  // namespace
+
 SceneOptions suite_scene(std::uint32_t index, std::uint32_t frames) {
+  if (index >= kSuiteMixedScenes) return family_scene(index, frames);
   SceneOptions o;
   o.seed = index + 1;
   o.frames = frames;
@@ -264,6 +375,8 @@ SceneSummary write_scene_sequence(const SceneOptions& options, const std::string
     throw app::Error("scene: the " + std::string(name_of(o.object)) + " needs a size of at least " + std::to_string(3 * patch) +
                      "x" + std::to_string(2 * patch + 20));
   if (o.depths < 1 || o.depths > 32) throw app::Error("scene: depths must be in 1..32");
+  if (!(o.illumination_period >= 1) || !(o.illumination >= 0 && o.illumination < 1))
+    throw app::Error("scene: the illumination's swing must be in [0, 1) and its period at least 1 frame");
   std::filesystem::create_directories(dir);
 
   const Plane brick = photo("brick");
@@ -301,6 +414,9 @@ SceneSummary write_scene_sequence(const SceneOptions& options, const std::string
   const std::vector<Pose4> path = scene_path(o, margin, smooth, rng);
   const bool smooth_path = o.motion == SceneMotion::kSmooth || o.motion == SceneMotion::kSweep;
   const auto smooth_at = [&](double t) { return smooth.at(t); };
+  // The look-alike's orbit: its phase and direction, drawn only when there is one.
+  const double orbit_phase = o.distractor ? 2 * kPi * rng.next_unit() : 0;
+  const double orbit_turn = o.distractor && rng.next_unit() < 0.5 ? -1.0 : 1.0;
 
   // The occluder: a square of brick a little larger than the object; for a
   // side, it slides in over 8 frames, stays, and slides back out.
@@ -328,7 +444,7 @@ SceneSummary write_scene_sequence(const SceneOptions& options, const std::string
   for (std::uint32_t f = 0; f < o.frames; ++f) {
     const Pose4 p = path[f + 1];
     const Pose4 prev = path[f];
-    const double gain = 1.0 + o.illumination * std::sin(2 * kPi * f / 300.0);
+    const double gain = 1.0 + o.illumination * std::sin(2 * kPi * f / o.illumination_period);
     Plane frame = background;
     for (double& v : frame.v) v *= gain;
     Plane cover(frame.w, frame.h);
@@ -350,18 +466,12 @@ SceneSummary write_scene_sequence(const SceneOptions& options, const std::string
     } else {
       composite(frame, layer, p.x, p.y, p.theta, gain, &cover);
     }
+    if (o.distractor) paint_distractor(frame, layer, p, f, object.radius, orbit_phase, orbit_turn, margin, gain);
     double hidden = 0;
     if (const double travel = occluder_cover(f); travel > 0)
       hidden = paint_occluder(frame, cover, brick, p, travel, occluder_side, o.occlusion_side, gain);
     const bool visible = hidden <= 0.25;
-    app::GrayImage out(o.width, o.height);
-    for (std::size_t i = 0; i < out.pixels.size(); ++i) {
-      // Box-Muller from the project's generator: the same noise on every machine.
-      const double u1 = std::max(rng.next_unit(), 1e-12), u2 = rng.next_unit();
-      const double n = o.noise_sigma * std::sqrt(-2 * std::log(u1)) * std::cos(2 * kPi * u2);
-      out.pixels[i] = static_cast<std::uint8_t>(std::clamp(std::lround(frame.v[i] + n), 0L, 255L));
-    }
-    y4m.write(out);
+    y4m.write(with_sensor_noise(frame, o.noise_sigma, rng));
     char row[128];
     std::snprintf(row, sizeof row, "%u,%.3f,%.3f,%.3f,%d,%d\n", f, p.x, p.y, p.theta, p.depth, visible ? 1 : 0);
     gt << row;

@@ -46,6 +46,9 @@ enum class SceneObject : std::uint8_t {
   // 90 frames), every cross-section alike. Not in the 32-scene suite: the
   // pipette scenes (pipette_scene) are its own.
   kGlassPipette,
+  // A small cut of camera.png in a 36x32 ellipse (~280 edge points), its
+  // default frame a wide 640x480: the suite's small-object family.
+  kSmall,
 };
 enum class SceneBackground : std::uint8_t { kGravel, kGrass, kBrick, kMoon, kPage, kSmooth };
 enum class SceneMotion : std::uint8_t {
@@ -81,9 +84,14 @@ struct SceneOptions {
   OcclusionSide occlusion_side = OcclusionSide::kCover;
   FocusStackKind stack = FocusStackKind::kTilted;
   double max_speed_px = 2.5;             // largest per-frame translation of the trajectory
-  double max_turn_deg = 1.0;             // largest per-frame rotation (kSpin: its steady rate is 1.2)
+  double max_turn_deg = 1.0;             // largest per-frame rotation (kSpin: its steady rate is 1.2 times this)
   double noise_sigma = 3.0;              // grey levels
   double illumination = 0.2;             // gain swings between 1 - this and 1 + this
+  double illumination_period = 300;      // frames per swing of the gain
+  // A look-alike: a second copy of the object (same look, same depth) on
+  // its own orbit around it, from just clear of it to four radii away, at
+  // another angle. Not in gt.csv; the tracker must not follow it.
+  bool distractor = false;
   std::uint32_t occlusion_start = 100;   // first occluded frame (0 frames: none)
   std::uint32_t occlusion_frames = 18;   // frames fully covered (a sliding occluder also takes 8 to enter and 8 to leave)
   std::uint32_t blur_every = 50;         // a motion-blurred frame every N frames (0: none)
@@ -101,12 +109,32 @@ void default_scene_size(SceneObject object, std::uint32_t& width, std::uint32_t&
 
 SceneSummary write_scene_sequence(const SceneOptions& options, const std::string& dir);
 
-// The scene suite: scene `index` (0-based, any index; the suite proper is
-// 0..kSuiteScenes-1), seed index + 1.
-inline constexpr std::uint32_t kSuiteScenes = 32;
+// The scene suite: scene `index` (0-based; the suite proper is
+// 0..kSuiteScenes-1), seed index + 1. Scenes 0..31 mix every object,
+// background, motion and occlusion side; from 32 on come the families
+// (SceneFamily), two scenes each, the first for tuning, the second held out.
+inline constexpr std::uint32_t kSuiteMixedScenes = 32;
+enum class SceneFamily : std::uint8_t {
+  kMixed,         // scenes 0..31
+  kSmallObject,   // the small object (kSmall) in a wide 640x480 textured frame
+  kFastSpin,      // spinning at 1.44 deg/frame (the tables' bound is 1.5) in noise of sigma 12
+  kDeepStack,     // a tilted 7-depth focus stack: neighbouring depths differ little
+  kIllumination,  // the gain swinging +-50% every 60 frames
+  kDistractor,    // a look-alike copy of the object orbiting close by
+};
+inline constexpr std::uint32_t kSceneFamilies = 5;  // the families after kMixed
+inline constexpr std::uint32_t kSuiteScenes = kSuiteMixedScenes + 2 * kSceneFamilies;
+const char* name_of(SceneFamily v) noexcept;
+constexpr SceneFamily suite_family(std::uint32_t index) noexcept {
+  return index < kSuiteMixedScenes ? SceneFamily::kMixed
+                                   : static_cast<SceneFamily>(1 + (index - kSuiteMixedScenes) / 2 % kSceneFamilies);
+}
 SceneOptions suite_scene(std::uint32_t index, std::uint32_t frames = 160);
-// Held-out scenes: indices 8..15, 24..31, ... (never used for tuning).
-constexpr bool suite_held_out(std::uint32_t index) noexcept { return (index / 8) % 2 == 1; }
+// Held-out scenes (never used for tuning): 8..15 and 24..31 of the mixed
+// scenes, and the second scene of each family (33, 35, ...).
+constexpr bool suite_held_out(std::uint32_t index) noexcept {
+  return index < kSuiteMixedScenes ? (index / 8) % 2 == 1 : (index - kSuiteMixedScenes) % 2 == 1;
+}
 // The pipette scenes (gabarit bench --pipette, thesis 6.4): the glass
 // pipette over cluttered backgrounds, each motion and occlusion side, blur
 // and the illumination swing; scenes 0..3 for tuning, 4..7 held out.
