@@ -24,6 +24,7 @@ Status TrackingSession::start(const SessionOptions& options, const Pose& initial
   if (!valid(options.filter) || !valid(options.recovery) || !pose_in_range(initial) || initial.depth >= fine_.depth_count() ||
       !(options.theta_observability >= 0.0f && options.theta_observability <= 1.0f) ||
       !(options.depth_switch_correlation >= 0.0f && options.depth_switch_correlation <= 2.0f) ||
+      !(options.verified_depth_switch >= 0.0f && options.verified_depth_switch <= 2.0f) ||
       !(options.depth_votes_decisive >= 0.0f) || !(options.clutter_floor >= 0.0f && options.clutter_floor <= 1.0f) ||
       options.vote_proposals < 1 || options.vote_proposals > kMaxVoteProposals ||
       !(options.verify_accept >= 0.0f && options.verify_accept <= 1.0f) ||
@@ -81,7 +82,7 @@ Status TrackingSession::step(const ImageView& image, SessionScratch scratch, Ses
     // unless another beats it by the margin).
     if (verdict_taken_ && fine_.depth_count() > 1 && out.state != TrackState::kLost &&
         !(depth_margin_ >= options_.depth_votes_decisive)) {
-      GABARIT_TRY(depth_by_intensity(image, pose_, *stack_, pose_.depth, options_.depth_switch_correlation));
+      GABARIT_TRY(depth_by_intensity(image, pose_, *stack_, pose_.depth, options_.verified_depth_switch));
       out.correlations += fine_.depth_count();
     }
     out.pose = pose_;
