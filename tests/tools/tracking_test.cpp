@@ -11,8 +11,6 @@
 #include "gabarit/host/scenes/scene_synth.hpp"
 #include "gabarit/host/scenes/synth.hpp"
 #include "gabarit/host/tables/model.hpp"
-#include "gabarit/host/tables/state_space.hpp"
-#include "gabarit/host/tables/table_builder.hpp"
 #include "gabarit/host/runs/tracking_run.hpp"
 #include "test_tables.hpp"
 
@@ -78,13 +76,10 @@ TEST(Tracking, AGrayscaleSessionHoldsThroughAStrongIlluminationSwing) {
   so.frames = 60;
   so.seed = 39;
   host::write_scene_sequence(so, dir.string());
-  host::BuildOptions bo;
-  bo.space.x = host::parse_axis("-5:5:11", "x");
-  bo.space.y = host::parse_axis("-5:5:11", "y");
-  bo.space.theta = host::parse_axis("-1.5:1.5:7", "theta");
   host::ImageModelOptions mo;
-  mo.canny = true;
-  const std::vector<std::byte> bytes = host::build_table(host::model_from_images({(dir / "model_00.pgm").string()}, mo), bo);
+  mo.canny = true;  // gabarit tables build's default detector, as the suite's tables
+  const std::vector<std::byte> bytes =
+      testing::build(host::model_from_images({(dir / "model_00.pgm").string()}, mo), "-5:5:11", "-5:5:11", "-1.5:1.5:7");
   const TableView table = testing::open_table(bytes);
   const auto truth = app::read_pose_csv((dir / "gt.csv").string());
   host::TrackingOptions options;
