@@ -46,16 +46,20 @@ bool DetectionRecovery::note_lookalikes(const Detection* found, std::uint32_t co
   return seen;
 }
 
-Status DetectionRecovery::survey(const ImageView& image, const Pose& target, TrackerScratch fine) noexcept {
-  lookalike_d2_ = 0.0f;
-  target_score_ = 0.0f;
+Status DetectionRecovery::find_several(const ImageView& image, TrackerScratch fine, Detection* found, std::uint32_t& count) noexcept {
   FinderOptions several = options_;
   several.max_count = several.candidates < kReachDetections ? several.candidates : kReachDetections;
   FinderScratch s = scratch_;
   s.fine = fine;
-  Detection found[kReachDetections + 1];
+  return finder_.find(image, several, s, std::span<Detection>(found, several.max_count), count);
+}
+
+Status DetectionRecovery::survey(const ImageView& image, const Pose& target, TrackerScratch fine) noexcept {
+  lookalike_d2_ = 0.0f;
+  target_score_ = 0.0f;
+  Detection found[kReachDetections + 1];  // room for the target's own pose
   std::uint32_t count = 0;
-  GABARIT_TRY(finder_.find(image, several, s, found, count));
+  GABARIT_TRY(find_several(image, fine, found, count));
   // The target itself, as detected or not: the detection at its pose, else
   // the pose with the best score found (a look-alike must match the target).
   std::uint32_t k = 0;
@@ -71,45 +75,44 @@ Status DetectionRecovery::survey(const ImageView& image, const Pose& target, Tra
   return Status::kOk;
 }
 
-Status DetectionRecovery::run(const ImageView& image, const LastSighting& last, TrackerScratch fine, SearchResult& out) noexcept {
-  out = SearchResult{};
-  const std::uint32_t n = lost_frames_++;
-  if (n % interval_ != 0) return Status::kOk;
-  FinderOptions several = options_;
-  several.max_count = several.candidates < kReachDetections ? several.candidates : kReachDetections;
-  FinderScratch s = scratch_;
-  s.fine = fine;
-  Detection found[kReachDetections];
-  std::uint32_t count = 0;
-  GABARIT_TRY(finder_.find(image, several, s, found, count));
-  out.searched = true;
-  if (note_lookalikes(found, count)) {
-    // The target and a copy both in view: the one nearer where the target
-    // would be at its last velocity, within the table's reach.
-    const float since = static_cast<float>(last.frames_since);
-    const Pose expected{last.pose.x + since * last.motion.vx, last.pose.y + since * last.motion.vy, last.pose.theta_deg,
-                        last.pose.depth};
-    const float alike = kLookalikeRatio * target_score_;
-    std::uint32_t k = count;
-    for (std::uint32_t j = 0; j < count; ++j)
-      if (found[j].score >= alike && within_table_reach(last, found[j].pose) &&
-          (k == count || distance_squared(found[j].pose, expected) < distance_squared(found[k].pose, expected)))
-        k = j;
-    if (k == count) return Status::kOk;
-    last_ = found[k];
-    out.from = found[k].pose;
-    return track_step(finder_.table(), finder_.detector(), image, out.from, fine, out.vote);
-  }
-  // Detections come best first: the best within reach, or one nearly as
-  // good nearer the last sighting.
+// The target and a copy both in view: the one nearer where the target would
+// be at its last velocity, within the table's reach (count: none).
+std::uint32_t DetectionRecovery::nearest_alike(const Detection* found, std::uint32_t count, const LastSighting& last) const noexcept {
+  const float since = static_cast<float>(last.frames_since);
+  const Pose expected{last.pose.x + since * last.motion.vx, last.pose.y + since * last.motion.vy, last.pose.theta_deg, last.pose.depth};
+  const float alike = kLookalikeRatio * target_score_;
+  std::uint32_t k = count;
+  for (std::uint32_t j = 0; j < count; ++j)
+    if (found[j].score >= alike && within_table_reach(last, found[j].pose) &&
+        (k == count || distance_squared(found[j].pose, expected) < distance_squared(found[k].pose, expected)))
+      k = j;
+  return k;
+}
+
+// Detections come best first: the best within reach, or one nearly as good
+// nearer the last sighting (count: none).
+std::uint32_t DetectionRecovery::best_within_reach(const Detection* found, std::uint32_t count, const LastSighting& last) const noexcept {
   std::uint32_t k = 0;
   while (k < count && !within_reach(last, found[k].pose)) ++k;
-  if (k == count) return Status::kOk;  // out.vote stays empty: nothing to accept
+  if (k == count) return count;
   const float best = found[k].score;
   for (std::uint32_t j = k + 1; j < count; ++j)
     if (found[j].score >= kLookalikeRatio * best && within_reach(last, found[j].pose) &&
         distance_squared(found[j].pose, last.pose) < distance_squared(found[k].pose, last.pose))
       k = j;
+  return k;
+}
+
+Status DetectionRecovery::run(const ImageView& image, const LastSighting& last, TrackerScratch fine, SearchResult& out) noexcept {
+  out = SearchResult{};
+  const std::uint32_t n = lost_frames_++;
+  if (n % interval_ != 0) return Status::kOk;
+  Detection found[kReachDetections];
+  std::uint32_t count = 0;
+  GABARIT_TRY(find_several(image, fine, found, count));
+  out.searched = true;
+  const std::uint32_t k = note_lookalikes(found, count) ? nearest_alike(found, count, last) : best_within_reach(found, count, last);
+  if (k == count) return Status::kOk;  // out.vote stays empty: nothing to accept
   last_ = found[k];
   out.from = found[k].pose;
   return track_step(finder_.table(), finder_.detector(), image, out.from, fine, out.vote);

@@ -71,6 +71,11 @@ class DetectionRecovery {
   bool note_lookalikes(const Detection* found, std::uint32_t count) noexcept;
   // Within the table's bound of the last sighting, look-alikes aside.
   bool within_table_reach(const LastSighting& last, const Pose& pose) const noexcept;
+  // The best kReachDetections detections (at most the finder's candidates) into found.
+  [[nodiscard]] Status find_several(const ImageView& image, TrackerScratch fine, Detection* found, std::uint32_t& count) noexcept;
+  // The detection to take, by the rules above; `count` for none.
+  std::uint32_t nearest_alike(const Detection* found, std::uint32_t count, const LastSighting& last) const noexcept;
+  std::uint32_t best_within_reach(const Detection* found, std::uint32_t count, const LastSighting& last) const noexcept;
   std::uint32_t lost_frames_ = 0;
   Detection last_;
   float lookalike_d2_ = 0.0f;
