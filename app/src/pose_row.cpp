@@ -11,6 +11,7 @@ void fill_row(TrackRow& row, const SessionResult& result) {
   row.step.score = result.score;
   row.confidence = result.confidence;
   row.reacquired = result.reacquired;
+  row.work = result.work;
 }
 
 std::string pose_csv_row(const TrackRow& row) {

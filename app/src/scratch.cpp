@@ -40,10 +40,11 @@ FinderBuffers::FinderBuffers(const TableView& table, const Detector& detector, c
   model_.resize(n.model_points);
   rotated_.resize(2 * n.model_points);
   candidates_.resize(kMaxFinderCandidates);
+  held_frame_.resize(std::size_t{width} * height);
 }
 
 FinderScratch FinderBuffers::scratch(TrackerScratch fine) {
-  return {coarse_image_, coarse_features_, feature_index_, accumulator_, model_, rotated_, candidates_, fine};
+  return {coarse_image_, coarse_features_, feature_index_, accumulator_, model_, rotated_, candidates_, fine, held_frame_};
 }
 
 SessionBuffers::SessionBuffers(const TableView& fine, const TableView* coarse, VoterChoice voter, bool search_features)

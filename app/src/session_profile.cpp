@@ -21,6 +21,7 @@ Status validate(const SessionProfile& p) noexcept {
   const auto within = [](std::uint64_t v, std::uint64_t lo, std::uint64_t hi) { return v >= lo && v <= hi; };
   const bool numbers = within(p.search_budget, 0, kSearchPlacementCount - kSearchNear) && within(p.search_interval, 1, 100) &&
                        within(p.screen_stride, 1, 16) && within(p.detect_after, 0, 1000) &&
+                       within(p.recovery_frames, 0, 1000) && within(p.survey_frames, 0, 1000) &&
                        within(p.particles, 1, 1000000) && within(p.edge_stride, 1, 64) && within(p.edge_tolerance, 0, 3) &&
                        (p.particle_improvements_off & ~kKnownImprovements) == 0;
   const bool kinds = static_cast<std::uint8_t>(p.recovery) <= static_cast<std::uint8_t>(RecoveryKind::kAuto) &&
@@ -58,6 +59,8 @@ SessionOptions session_options(const SessionProfile& p) noexcept {
   o.recovery.interval = p.search_interval;
   o.recovery.screen_stride = p.screen_stride;
   o.recovery.detect_after = p.detect_after;
+  o.recovery_frames = static_cast<float>(p.recovery_frames);
+  o.survey_frames = static_cast<float>(p.survey_frames);
   return o;
 }
 
@@ -67,7 +70,8 @@ namespace {
 bool default_numbers(const SessionProfile& p) noexcept {
   const SessionProfile d;
   return p.search_budget == d.search_budget && p.search_interval == d.search_interval &&
-         p.screen_stride == d.screen_stride && p.detect_after == d.detect_after && p.particles == d.particles &&
+         p.screen_stride == d.screen_stride && p.detect_after == d.detect_after && p.recovery_frames == d.recovery_frames &&
+         p.survey_frames == d.survey_frames && p.particles == d.particles &&
          p.seed == d.seed && p.edge_stride == d.edge_stride && p.edge_tolerance == d.edge_tolerance &&
          p.particle_improvements_off == d.particle_improvements_off;
 }

@@ -106,6 +106,14 @@ const Key kKeys[] = {
      [](SessionProfile& p, const std::string& v, const std::string& w) {
        p.detect_after = static_cast<std::uint32_t>(parse_count(v, w, 0, 1000));
      }},
+    {"recovery-frames", [](const SessionProfile& p) { return std::to_string(p.recovery_frames); },
+     [](SessionProfile& p, const std::string& v, const std::string& w) {
+       p.recovery_frames = static_cast<std::uint32_t>(parse_count(v, w, 0, 1000));
+     }},
+    {"survey-frames", [](const SessionProfile& p) { return std::to_string(p.survey_frames); },
+     [](SessionProfile& p, const std::string& v, const std::string& w) {
+       p.survey_frames = static_cast<std::uint32_t>(parse_count(v, w, 0, 1000));
+     }},
     {"particles", [](const SessionProfile& p) { return std::to_string(p.particles); },
      [](SessionProfile& p, const std::string& v, const std::string& w) {
        p.particles = static_cast<std::uint32_t>(parse_count(v, w, 1, 1000000));
@@ -242,7 +250,14 @@ std::vector<Option> session_option_group() {
                                                  "particle filter over the whole frame (docs/particle-filter.md); auto (default):" + indent +
                                                  "detection with a grayscale table that carries model images, else the grid"},
       {"--detect-after", "N", "--recovery detect (and auto): the first N lost frames search with the grid, the later ones" + indent +
-                                  "by detection (default 2; 0: detection from the first)"},
+                                  "by detection (default 0: detection from the first)"},
+      {"--recovery-frames", "N", "--recovery detect (and auto): a lost frame's detection work, in tracked frames'" + indent +
+                                     "work; a search that needs more goes on over the next frames, on the frame it" + indent +
+                                     "began on, and what it finds is caught up with (docs/detection.md); 0..1000" + indent +
+                                     "(default 0: each search in one frame)"},
+      {"--survey-frames", "N", "--recovery detect (and auto), verifying: the look-alike survey's work after each" + indent +
+                                   "tracked frame, in tracked frames' work, until it has covered the frame; 0..1000" + indent +
+                                   "(default 2; 0: the whole survey after the first frame)"},
       {"--subcell", "parabola|alignment", "how refinement places the pose within the cell: a parabola through the" + indent +
                                               "neighbouring cells' scores (default), or a least-squares alignment of the" + indent +
                                               "matched features (docs/tracking.md compares them)"},
@@ -288,13 +303,16 @@ SessionProfile read_session_profile(const Args& args) {
   number("--search-interval", "search-interval");
   number("--screen-stride", "screen-stride");
   number("--detect-after", "detect-after");
+  number("--recovery-frames", "recovery-frames");
+  number("--survey-frames", "survey-frames");
   number("--particles", "particles");
   number("--seed", "seed");
   number("--edge-stride", "edge-stride");
   number("--edge-tolerance", "edge-tolerance");
   if (args.has("--without")) p.particle_improvements_off = parse_improvements_off(args.get("--without"), "--without");
-  if (p.recovery != RecoveryKind::kDetection && p.recovery != RecoveryKind::kAuto && args.has("--detect-after"))
-    throw UsageError("--detect-after applies to --recovery detect (and auto)");
+  for (const char* option : {"--detect-after", "--recovery-frames", "--survey-frames"})
+    if (p.recovery != RecoveryKind::kDetection && p.recovery != RecoveryKind::kAuto && args.has(option))
+      throw UsageError(std::string(option) + " applies to --recovery detect (and auto)");
   for (const char* option : {"--particles", "--seed", "--without", "--edge-stride", "--edge-tolerance"}) {
     if (p.recovery != RecoveryKind::kParticles && args.has(option) && args.get_or("--tracker", "stencil") != "particle")
       throw UsageError(std::string(option) + " applies to --tracker particle and --recovery particle");

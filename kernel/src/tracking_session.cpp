@@ -1,5 +1,6 @@
 #include "gabarit/tracking_session.hpp"
 
+#include "gabarit/finder_search.hpp"
 #include "gabarit/refinement.hpp"
 
 namespace gabarit {
@@ -31,7 +32,9 @@ Status TrackingSession::start(const SessionOptions& options, const Pose& initial
       !(options.verify_lost >= 0.0f && options.verify_lost <= 1.0f) ||
       !(options.ambiguity_margin >= 0.0f && options.ambiguity_margin <= 1.0f) ||
       !(options.verification.spacing_px > 0.0f && options.verification.spacing_px <= 4.0f) ||
-      !(options.verification.distinct_px >= 0.0f)) {
+      !(options.verification.distinct_px >= 0.0f) ||
+      !(options.survey_frames >= 0.0f && options.survey_frames <= 1000.0f) ||
+      !(options.recovery_frames >= 0.0f && options.recovery_frames <= 1000.0f)) {
     return Status::kInvalidArgument;
   }
   if (coarse_ != nullptr && coarse_->depth_count() != fine_.depth_count()) return Status::kInvalidArgument;
@@ -43,6 +46,7 @@ Status TrackingSession::start(const SessionOptions& options, const Pose& initial
   search_.reset();
   lost_ = false;
   surveyed_ = false;
+  frame_work_ = 0;
   return Status::kOk;
 }
 
@@ -60,10 +64,8 @@ Status TrackingSession::step(const ImageView& image, SessionScratch scratch, Ses
   ++last_confident_.frames_since;
   verdict_ = Verdict{};
   verdict_taken_ = false;
-  if (!surveyed_ && detection_ != nullptr && verifying()) {
-    surveyed_ = true;
-    GABARIT_TRY(detection_->survey(image, pose_, scratch.fine));
-  }
+  step_work_ = 0;
+  const bool tracking = !lost_;
   GABARIT_TRY(lost_ ? recover(image, scratch, out) : track_fine(image, scratch, out));
   if (verdict_.found) {
     out.verified_score = verdict_.score;
@@ -102,7 +104,30 @@ Status TrackingSession::step(const ImageView& image, SessionScratch scratch, Ses
     if (fine_.axis_theta().cells > 1) GABARIT_TRY(angle_by_intensity(image, pose_, *stack_, out.pose.theta_deg));
   }
   if (out.confidence == Confidence::kHigh) last_confident_ = {pose_, filter_.state(), 0};
+  if (stack_ != nullptr) step_work_ += stack_correlation_work(*stack_, out.correlations);
+  if (tracking) {
+    // What a tracked frame costs: the budget's measure (integers, so every
+    // target budgets alike).
+    frame_work_ = frame_work_ == 0 ? step_work_ : (7 * frame_work_ + step_work_) / 8;
+  }
+  // Verifying, the survey for look-alikes, a piece after each tracked frame.
+  if (detection_ != nullptr && verifying() && !lost_) {
+    if (!surveyed_) detection_->restart_survey();
+    surveyed_ = true;
+    if (!detection_->surveyed()) {
+      GABARIT_TRY(detection_->survey(image, pose_, scratch.fine, detection_budget(options_.survey_frames)));
+      step_work_ += detection_->last_work();
+    }
+  }
+  out.work = step_work_;
   return Status::kOk;
+}
+
+std::uint64_t TrackingSession::detection_budget(float frames) const noexcept {
+  if (!(frames > 0.0f)) return kUnlimitedWork;
+  const std::uint64_t frame = frame_work_ > 0 ? frame_work_ : track_step_work(fine_, StepResult{});
+  const float budget = frames * static_cast<float>(frame);
+  return budget >= 1.0f ? static_cast<std::uint64_t>(budget) : 1;
 }
 
 // The confidence ratios (none below low_ratio of the reference score) tell
@@ -192,6 +217,7 @@ Status TrackingSession::verify_choice(const ImageView& image, const Proposals& p
 Status TrackingSession::measure_at(const ImageView& image, const Pose& centre, SessionScratch scratch, Measurement& m) noexcept {
   m = Measurement{};
   GABARIT_TRY(track_step(fine_, detector_, image, centre, scratch.fine, m.step));
+  step_work_ += track_step_work(fine_, m.step);
   if (verifying()) propose_top_cells(scratch.fine.counters, centre, m);
   GatedChoice choice;
   GABARIT_TRY(filter_.choose(fine_, scratch.fine.counters, centre, m.step.roi_centre_x, m.step.roi_centre_y, pose_.depth, choice));
@@ -240,6 +266,7 @@ Status TrackingSession::track_fine(const ImageView& image, SessionScratch scratc
   if (!options_.motion_filter) {
     // The thesis's loop: the best cell, whatever its score.
     GABARIT_TRY(track_step(fine_, detector_, image, predicted, scratch.fine, out.step));
+    step_work_ += track_step_work(fine_, out.step);
     out.score = out.step.score;
     out.confidence = filter_.grade(out.step.score, normalised_score(out.step.runner_up));
     out.state = out.step.state;
@@ -339,7 +366,8 @@ Status TrackingSession::recover(const ImageView& image, SessionScratch scratch, 
   // set the pose's depth from clutter.
   const std::uint32_t lost_frame = lost_frames_++;
   if (detection_ != nullptr && lost_frame >= options_.recovery.detect_after) {
-    GABARIT_TRY(detection_->run(image, last_confident_, scratch.fine, found));
+    GABARIT_TRY(detection_->run(image, last_confident_, scratch.fine, detection_budget(options_.recovery_frames), found));
+    step_work_ += detection_->last_work();
   } else if (particles_ != nullptr) {
     GABARIT_TRY(particles_->run(image, last_confident_, scratch.fine, found));
   } else {

@@ -33,7 +33,9 @@ SessionProfile tuned() {
   p.search_budget = 40;
   p.search_interval = 3;
   p.screen_stride = 5;
-  p.detect_after = 0;
+  p.detect_after = 5;
+  p.recovery_frames = 6;
+  p.survey_frames = 0;
   p.particles = 77;
   p.seed = 1234567890123ull;
   p.edge_stride = 9;
@@ -107,6 +109,8 @@ TEST(SessionProfile, OptionsAreTheKernelsDefaultsAndThePlainLoop) {
   EXPECT_EQ(std::memcmp(&d.recovery, &want.recovery, sizeof want.recovery), 0);
   EXPECT_EQ(d.motion_filter, want.motion_filter);
   EXPECT_EQ(d.depth_votes_decisive, want.depth_votes_decisive);
+  EXPECT_EQ(d.recovery_frames, want.recovery_frames);
+  EXPECT_EQ(d.survey_frames, want.survey_frames);
   const SessionOptions plain = session_options(plain_profile());
   EXPECT_FALSE(plain.motion_filter || plain.refine || plain.recover || plain.vote_at_last_pose || plain.follow_when_unsure);
   SessionProfile parts = plain_profile();
@@ -116,6 +120,8 @@ TEST(SessionProfile, OptionsAreTheKernelsDefaultsAndThePlainLoop) {
   EXPECT_FALSE(with_filter.refine || with_filter.recover);
   EXPECT_EQ(session_options(tuned()).recovery.budget, 40u);
   EXPECT_TRUE(session_options(tuned()).align_features);
+  EXPECT_EQ(session_options(tuned()).recovery_frames, 6.0f);
+  EXPECT_EQ(session_options(tuned()).survey_frames, 0.0f);
 }
 
 // What a device reports is what the harness's reference runs: the bits of the
@@ -152,10 +158,13 @@ TEST(SessionProfile, ModeBitsCarryTheChoicesAndFlagTunedNumbers) {
 
 TEST(SessionProfile, CommandLineGroupReadsIntoTheProfileOnce) {
   Args args("t", "", "", session_option_group());
-  ASSERT_TRUE(args.parse({"--recovery", "detect", "--detect-after", "0", "--search-budget", "40", "--no-focus-stack"}));
+  ASSERT_TRUE(args.parse({"--recovery", "detect", "--detect-after", "4", "--search-budget", "40", "--no-focus-stack",
+                          "--recovery-frames", "6", "--survey-frames", "0"}));
   const SessionProfile p = read_session_profile(args);
   EXPECT_EQ(p.recovery, RecoveryKind::kDetection);
-  EXPECT_EQ(p.detect_after, 0u);
+  EXPECT_EQ(p.detect_after, 4u);
+  EXPECT_EQ(p.recovery_frames, 6u);
+  EXPECT_EQ(p.survey_frames, 0u);
   EXPECT_EQ(p.search_budget, 40u);
   EXPECT_FALSE(p.focus_stack);
   Args refused("t", "", "", session_option_group());
@@ -164,6 +173,12 @@ TEST(SessionProfile, CommandLineGroupReadsIntoTheProfileOnce) {
   Args stray("t", "", "", session_option_group());
   ASSERT_TRUE(stray.parse({"--recovery", "grid", "--detect-after", "3"}));
   EXPECT_THROW((void)read_session_profile(stray), UsageError);
+  Args stray_budget("t", "", "", session_option_group());
+  ASSERT_TRUE(stray_budget.parse({"--recovery", "grid", "--recovery-frames", "3"}));
+  EXPECT_THROW((void)read_session_profile(stray_budget), UsageError);
+  Args too_much("t", "", "", session_option_group());
+  ASSERT_TRUE(too_much.parse({"--survey-frames", "1001"}));
+  EXPECT_THROW((void)read_session_profile(too_much), UsageError);
   // The default (auto) may detect: --detect-after applies to it.
   Args by_default("t", "", "", session_option_group());
   ASSERT_TRUE(by_default.parse({"--detect-after", "3"}));

@@ -14,12 +14,13 @@
 
 #include "gabarit/app/scratch.hpp"
 #include "gabarit/tracking_session.hpp"
+#include "finder_rig.hpp"
 #include "test_tables.hpp"
 
 namespace gabarit {
 namespace {
 
-constexpr std::uint32_t kSide = 320;
+constexpr std::uint32_t kSide = testing::kFinderSide;
 
 TEST(Orientation, AxesDiagonalsAndFolding) {
   EXPECT_EQ(orientation_256(1, 0), 0);
@@ -46,19 +47,9 @@ TEST(Orientation, FollowsTheAngleWithinAStep) {
   }
 }
 
-// 0.5-degree cells: a detection within 1 degree is then a cell's worth.
-struct Rig : testing::PointScene {
-  Rig() : PointScene(33, 70, 20, "-4:4:9", "-2:2:9", kSide, 0.005) {}
-};
-
-// A rig, its finder with the default options, and scratch for both levels.
-struct Finding {
-  Rig rig;
-  ModelFinder finder{rig.table, detector_of(rig.table)};
-  FinderOptions options;
-  app::FinderBuffers buffers{rig.table, detector_of(rig.table), options, kSide, kSide};
-  testing::TrackerTestScratch fine{rig.table};
-};
+using Rig = testing::FinderRig;
+using testing::Finding;
+using testing::twins;
 
 double angle_error(double a, double b) { return std::fabs(std::remainder(a - b, 360.0)); }
 
@@ -144,13 +135,21 @@ TEST(ModelFinder, RefusesBadInputAndShortBuffers) {
   EXPECT_EQ(finder.find(f.view(), options, buffers.scratch(fine.view()), out, count), Status::kInvalidArgument);
 }
 
-// Frames until the session is within 2 px of the target after it reappears at
-// (rx, ry), or -1 within `budget` frames.
-int reacquire(const Rig& rig, bool detection, float rx, float ry, int budget = 10, std::uint32_t detect_after = 0) {
+// A session losing the target (4 frames in view, 12 hidden), and it
+// reappearing at (rx, ry): frames until the session is within 2 px of it
+// (-1: not within `budget` frames), and the work of the frames.
+struct Reacquisition {
+  int frames = -1;
+  std::uint64_t most_lost_work = 0;     // the costliest frame of the lost period
+  std::uint64_t tracked_work = 0;       // the tracked frames' mean
+};
+Reacquisition reacquisition(const Rig& rig, bool detection, float rx, float ry, int budget, std::uint32_t detect_after,
+                            float recovery_frames) {
   testing::TrackerTestScratch scratch(rig.table);
   TrackingSession session(rig.table, nullptr, detector_of(rig.table));
   SessionOptions so;
   so.recovery.detect_after = detect_after;
+  so.recovery_frames = recovery_frames;
   EXPECT_EQ(session.start(so, {60, 60, 0, 0}), Status::kOk);
   ModelFinder finder(rig.table, detector_of(rig.table));
   const FinderOptions options;
@@ -159,14 +158,31 @@ int reacquire(const Rig& rig, bool detection, float rx, float ry, int budget = 1
   if (detection) session.use_detection_recovery(&stage);
   app::Rng noise(4);
   SessionResult r;
-  for (int f = 0; f < 4; ++f) EXPECT_EQ(session.step(rig.frame(60, 60, 0, true, noise).view(), {scratch.view(), {}}, r), Status::kOk);
-  for (int f = 0; f < 12; ++f) EXPECT_EQ(session.step(rig.frame(0, 0, 0, false, noise).view(), {scratch.view(), {}}, r), Status::kOk);
+  Reacquisition out;
+  for (int f = 0; f < 4; ++f) {
+    EXPECT_EQ(session.step(rig.frame(60, 60, 0, true, noise).view(), {scratch.view(), {}}, r), Status::kOk);
+    out.tracked_work += r.work / 4;
+  }
+  for (int f = 0; f < 12; ++f) {
+    EXPECT_EQ(session.step(rig.frame(0, 0, 0, false, noise).view(), {scratch.view(), {}}, r), Status::kOk);
+    out.most_lost_work = std::max(out.most_lost_work, r.work);
+  }
   EXPECT_TRUE(session.lost());
   for (int f = 0; f < budget; ++f) {
     EXPECT_EQ(session.step(rig.frame(rx, ry, 40, true, noise).view(), {scratch.view(), {}}, r), Status::kOk);
-    if (!session.lost() && std::hypot(session.pose().x - rx, session.pose().y - ry) <= 2.0) return f + 1;
+    out.most_lost_work = std::max(out.most_lost_work, r.work);
+    if (!session.lost() && std::hypot(session.pose().x - rx, session.pose().y - ry) <= 2.0) {
+      out.frames = f + 1;
+      break;
+    }
   }
-  return -1;
+  return out;
+}
+
+// Each search in one frame (recovery_frames 0), as these tests of where the
+// target is taken want.
+int reacquire(const Rig& rig, bool detection, float rx, float ry, int budget = 10, std::uint32_t detect_after = 0) {
+  return reacquisition(rig, detection, rx, ry, budget, detect_after, 0.0f).frames;
 }
 
 TEST(DetectionRecovery, FindsATargetThatReappearsFarAway) {
@@ -199,12 +215,19 @@ TEST(DetectionRecovery, TakesATargetOnlyWhereItCanHaveGotTo) {
   EXPECT_LE(frames, reachable + 3);
 }
 
-// A frame holding the rig's model twice: at (x, y, theta) and at the copy's place.
-app::GrayImage twins(const Rig& rig, float x, float y, float theta, float cx, float cy, float ctheta) {
-  app::GrayImage a = testing::draw_points(rig.points, x, y, theta, kSide);
-  const app::GrayImage b = testing::draw_points(rig.points, cx, cy, ctheta, kSide);
-  for (std::size_t i = 0; i < a.pixels.size(); ++i) a.pixels[i] = std::max(a.pixels[i], b.pixels[i]);
-  return a;
+// Spread over frames (recovery_frames 2), the search costs each lost frame about
+// two tracked frames' work (and the catch-up votes on the frame it ends):
+// whole in one frame it is well over ten; the target is found a few frames later.
+TEST(DetectionRecovery, ASearchSpreadOverFramesBoundsEachFrameAndStillFindsTheTarget) {
+  const Rig rig;
+  const Reacquisition whole = reacquisition(rig, true, 110, 110, 10, 0, 0.0f);
+  const Reacquisition spread = reacquisition(rig, true, 110, 110, 40, 0, 2.0f);
+  ASSERT_GT(spread.tracked_work, 0u);
+  EXPECT_GT(whole.most_lost_work, 10 * whole.tracked_work);
+  EXPECT_LE(spread.most_lost_work, 6 * spread.tracked_work);
+  EXPECT_GE(whole.frames, 1);
+  EXPECT_GT(spread.frames, whole.frames);
+  EXPECT_LE(spread.frames, 30);
 }
 
 TEST(DetectionRecovery, ALookalikeSeenBoundsWhereTheTargetIsTakenAgain) {
@@ -213,7 +236,7 @@ TEST(DetectionRecovery, ALookalikeSeenBoundsWhereTheTargetIsTakenAgain) {
   DetectionRecovery stage(finder, options, buffers.scratch(fine.view()));
   // Surveyed with a copy 184 px off: the reach is at most half that.
   const Pose target{80, 80, 0, 0};
-  ASSERT_EQ(stage.survey(twins(rig, 80, 80, 0, 220, 200, 30).view(), target, fine.view()), Status::kOk);
+  ASSERT_EQ(stage.survey(twins(rig, 80, 80, 0, 220, 200, 30).view(), target, fine.view(), kUnlimitedWork), Status::kOk);
   EXPECT_NEAR(stage.lookalike_distance_squared(), 140.0f * 140 + 120 * 120, 200.0f);
   const LastSighting last{target, {}, 1000};  // long lost: the table's bound alone would reach anywhere
   EXPECT_TRUE(stage.within_reach(last, {150, 140, 0, 0}));
@@ -222,11 +245,11 @@ TEST(DetectionRecovery, ALookalikeSeenBoundsWhereTheTargetIsTakenAgain) {
   // The copy alone (the target hidden) is not taken ...
   SearchResult found;
   const app::GrayImage copy_only = testing::draw_points(rig.points, 220, 200, 30, kSide);
-  ASSERT_EQ(stage.run(copy_only.view(), last, fine.view(), found), Status::kOk);
+  ASSERT_EQ(stage.run(copy_only.view(), last, fine.view(), kUnlimitedWork, found), Status::kOk);
   EXPECT_TRUE(found.searched);
   EXPECT_EQ(found.vote.best.votes, 0u);
   // ... the target, back near where it was, is, though the copy is there too.
-  ASSERT_EQ(stage.run(twins(rig, 100, 95, 10, 220, 200, 30).view(), last, fine.view(), found), Status::kOk);
+  ASSERT_EQ(stage.run(twins(rig, 100, 95, 10, 220, 200, 30).view(), last, fine.view(), kUnlimitedWork, found), Status::kOk);
   EXPECT_LE(std::hypot(found.from.x - 100, found.from.y - 95), 2.0);
   // Without a survey nothing bounds the reach but the table.
   DetectionRecovery fresh(finder, options, buffers.scratch(fine.view()));

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <filesystem>
 
 #include "gabarit/app/evaluation.hpp"
@@ -59,13 +60,35 @@ TEST(Tracking, DecimatedToHalfStillExactAtTwentyPercent) {
   EXPECT_EQ(a.exact, a.frames);
 }
 
+// A grayscale scene written to a temporary folder, with the table gabarit
+// tables build makes from its model image (Canny, +-5 px, +-1.5 deg), as the
+// scene suite's; the folder goes with it.
+struct GrayScene {
+  explicit GrayScene(const host::SceneOptions& so, const std::string& name)
+      : dir(std::filesystem::temp_directory_path() / (name + "_" + std::to_string(::getpid()))) {
+    host::write_scene_sequence(so, dir.string());
+    host::ImageModelOptions mo;
+    mo.canny = true;  // gabarit tables build's default detector, as the suite's tables
+    bytes = testing::build(host::model_from_images({(dir / "model_00.pgm").string()}, mo), "-5:5:11", "-5:5:11", "-1.5:1.5:7");
+    truth = app::read_pose_csv((dir / "gt.csv").string());
+  }
+  ~GrayScene() { std::filesystem::remove_all(dir); }
+  GrayScene(const GrayScene&) = delete;
+  GrayScene& operator=(const GrayScene&) = delete;
+  Pose start() const {
+    return {static_cast<float>(truth[0].x), static_cast<float>(truth[0].y), static_cast<float>(truth[0].theta_deg), 0};
+  }
+  std::filesystem::path dir;
+  std::vector<std::byte> bytes;
+  std::vector<app::PoseSample> truth;
+};
+
 // Vote, then verify, on a grayscale scene whose gain swings +-50% every 60
 // frames: in the dim trough the edges fall below the detector's thresholds
 // and the votes are too weak to trust, but the verified pose correlates as
 // a tracked one must, so the frames are measurements and the track is never
 // lost (before, it was lost for about 12 frames of each trough).
 TEST(Tracking, AGrayscaleSessionHoldsThroughAStrongIlluminationSwing) {
-  const auto dir = std::filesystem::temp_directory_path() / ("gabarit_light_" + std::to_string(::getpid()));
   host::SceneOptions so;
   so.object = host::SceneObject::kAstronaut;
   so.background = host::SceneBackground::kBrick;
@@ -75,28 +98,58 @@ TEST(Tracking, AGrayscaleSessionHoldsThroughAStrongIlluminationSwing) {
   so.illumination_period = 60;
   so.frames = 60;
   so.seed = 39;
-  host::write_scene_sequence(so, dir.string());
-  host::ImageModelOptions mo;
-  mo.canny = true;  // gabarit tables build's default detector, as the suite's tables
-  const std::vector<std::byte> bytes =
-      testing::build(host::model_from_images({(dir / "model_00.pgm").string()}, mo), "-5:5:11", "-5:5:11", "-1.5:1.5:7");
-  const TableView table = testing::open_table(bytes);
-  const auto truth = app::read_pose_csv((dir / "gt.csv").string());
+  const GrayScene scene(so, "gabarit_light");
+  const TableView table = testing::open_table(scene.bytes);
+  const auto& truth = scene.truth;
   host::TrackingOptions options;
   options.profile = app::SessionProfile{};  // gabarit track's defaults
-  auto frames_in = app::open_frames((dir / "frames.y4m").string());
+  auto frames_in = app::open_frames((scene.dir / "frames.y4m").string());
   std::vector<app::PoseSample> poses;
   std::size_t lost = 0;
-  const Pose init{static_cast<float>(truth[0].x), static_cast<float>(truth[0].y), static_cast<float>(truth[0].theta_deg), 0};
-  host::run_tracking(table, *frames_in, init, options, [&](const app::TrackRow& r) {
+  host::run_tracking(table, *frames_in, scene.start(), options, [&](const app::TrackRow& r) {
     poses.push_back({r.frame, r.step.pose.x, r.step.pose.y, r.step.pose.theta_deg, 0, true});
     lost += r.step.state == TrackState::kLost;
   });
-  std::filesystem::remove_all(dir);
   const app::Accuracy a = app::evaluate(poses, truth);
   EXPECT_EQ(lost, 0u);
   EXPECT_GE(a.within_1px, a.frames * 95 / 100) << a.within_1px << " of " << a.frames;
   EXPECT_EQ(a.failures, 0u);
+}
+
+// The survey for look-alikes (a detection over the whole frame) is spread
+// over the first tracked frames: no frame's work is more than a few tracked
+// frames'; in one piece, the first frame costs many.
+TEST(Tracking, TheSurveyForLookalikesIsSpreadOverTheFirstFrames) {
+  host::SceneOptions so;
+  so.object = host::SceneObject::kAstronaut;
+  so.background = host::SceneBackground::kGravel;
+  so.motion = host::SceneMotion::kWalk;
+  so.occlusion_side = host::OcclusionSide::kNone;
+  so.frames = 40;
+  so.seed = 7;
+  const GrayScene scene(so, "gabarit_survey");
+  const TableView table = testing::open_table(scene.bytes);
+  const auto works = [&](std::uint32_t survey_frames) {
+    host::TrackingOptions options;
+    options.profile = app::SessionProfile{};
+    options.profile.survey_frames = survey_frames;
+    auto frames_in = app::open_frames((scene.dir / "frames.y4m").string());
+    std::vector<std::uint64_t> w;
+    host::run_tracking(table, *frames_in, scene.start(), options, [&](const app::TrackRow& r) {
+      EXPECT_NE(r.step.state, TrackState::kLost) << r.frame;
+      w.push_back(r.work);
+    });
+    return w;
+  };
+  const std::vector<std::uint64_t> spread = works(app::SessionProfile{}.survey_frames), whole = works(0);
+  ASSERT_EQ(spread.size(), 40u);
+  std::vector<std::uint64_t> sorted = spread;
+  std::sort(sorted.begin(), sorted.end());
+  const std::uint64_t median = sorted[sorted.size() / 2];
+  EXPECT_LE(sorted.back(), 4 * median);
+  EXPECT_GT(whole[0], 10 * median);  // the whole survey on the first frame
+  // Spread, the next frame still pays for a piece of it; whole, it is done.
+  EXPECT_GT(spread[1], whole[1]);
 }
 
 }  // namespace

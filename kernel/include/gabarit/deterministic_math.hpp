@@ -39,4 +39,11 @@ constexpr SinCos sin_cos_deg(float deg) noexcept {
   }
 }
 
+// An angle in degrees brought into (-180, 180].
+constexpr float wrap_degrees(float deg) noexcept {
+  while (deg > 180.0f) deg -= 360.0f;
+  while (deg <= -180.0f) deg += 360.0f;
+  return deg;
+}
+
 }  // namespace gabarit

@@ -133,6 +133,9 @@ struct FinderScratch {
   std::span<std::int32_t> rotated;          // 2 x model_points
   std::span<FinderCandidate> candidates;    // options.candidates (kMaxFinderCandidates fits any)
   TrackerScratch fine;                      // for the table, as track_step wants it
+  // Optional, width x height: a search spread over frames keeps its first
+  // frame here and works on it throughout (finder_search.hpp); find ignores it.
+  std::span<std::uint8_t> held_frame;
 };
 
 class ModelFinder {
@@ -160,8 +163,10 @@ class ModelFinder {
 
   const TableView& table() const noexcept { return table_; }
   const Detector& detector() const noexcept { return detector_; }
+  const FocusStack* focus_stack() const noexcept { return stack_; }
 
  private:
+  friend class FinderSearch;  // find's steps, spread over frames (finder_search.hpp)
   std::uint32_t load_model(std::uint16_t depth, std::uint32_t factor, bool orientation,
                            std::span<OrientedPoint> out) const noexcept;
   const TableView& table_;

@@ -50,10 +50,11 @@ struct RecoveryOptions {
   std::uint32_t coarse_proposals = 8;  // with a coarse table: its best cells checked by the fine table, 1..kMaxCoarseProposals
   // With a detection stage (TrackingSession::use_detection_recovery): the
   // first detect_after lost frames search locally (the grid, or the coarse
-  // table), the later ones by detection over the whole frame. 0: detection
-  // from the first lost frame. 2 was chosen on the scene suite's tuning half
-  // (docs/detection.md).
-  std::uint32_t detect_after = 2;
+  // table), the later ones by detection over where the target can be. 0:
+  // detection from the first lost frame: with the search bounded by the
+  // reach it costs less than the grid, and the scene suite tracks the same
+  // with 0 and 2 (docs/detection.md).
+  std::uint32_t detect_after = 0;
 };
 // True if the options are usable (strides and interval >= 1, proposals in range, a finite turn).
 bool valid(const RecoveryOptions& options) noexcept;

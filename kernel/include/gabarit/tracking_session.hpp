@@ -94,6 +94,20 @@ struct SessionOptions {
   // a stack whose neighbouring depths differ little, more lets texture
   // around the object flip it (docs/tracking.md).
   float verified_depth_switch = 0.01f;
+  // With a detection stage, verifying: the work the survey for look-alikes
+  // may spend after a tracked frame, in tracked frames (the running mean of
+  // their work, finder_search.hpp); it goes on over the next frames until it
+  // has covered the frame. 0: the whole survey after the first frame (a frame
+  // 30 to 100 times the median on the scene suite's wide frames).
+  float survey_frames = 2.0f;
+  // Likewise for a lost frame's search (0, the default: each search in the
+  // frame that needs it; the search's area, where the target can be, bounds
+  // its cost). Spread, a search works on the frame it began on and what it
+  // finds is caught up with (detection_recovery.hpp): on the scene suite the
+  // worst frame is then about 7 times the median instead of 13 with 6, but
+  // the target is found a few frames later and the tuning half tracks worse
+  // (docs/detection.md, "A per-frame budget").
+  float recovery_frames = 0.0f;
 };
 inline constexpr std::uint8_t kMaxVoteProposals = 6;
 // track_step frame after frame, nothing added: the thesis's tracker.
@@ -116,6 +130,10 @@ struct SessionResult {
   bool verified = false;
   bool searched_coarse = false;
   bool reacquired = false;   // this frame ended a lost period
+  // What the frame cost, in work units (finder_search.hpp: about a vote
+  // each; counted, not timed, so the same on every target): its votes, its
+  // correlations with the focus stack and its detection work.
+  std::uint64_t work = 0;
 };
 
 class TrackingSession {
@@ -140,7 +158,9 @@ class TrackingSession {
   // re-acquire by detection over the whole frame; its result is accepted by
   // the same rule. It takes precedence over a particle stage. Verifying, the
   // session's first frame is surveyed with it for look-alikes of the target
-  // (DetectionRecovery::survey), which bound where it re-acquires.
+  // (DetectionRecovery::survey), which bound where it re-acquires; the
+  // survey (survey_frames) and each search (recovery_frames) may be spread
+  // over frames.
   void use_detection_recovery(DetectionRecovery* stage) noexcept { detection_ = stage; }
 
   const Pose& pose() const noexcept { return pose_; }
@@ -190,7 +210,10 @@ class TrackingSession {
   ParticleRecovery* particles_ = nullptr;
   DetectionRecovery* detection_ = nullptr;
   std::uint32_t lost_frames_ = 0;  // frames of this lost period so far
-  bool surveyed_ = false;          // the first frame searched for look-alikes
+  bool surveyed_ = false;          // the survey for look-alikes begun
+  std::uint64_t frame_work_ = 0;   // the running mean of tracked frames' work (0: none yet)
+  std::uint64_t step_work_ = 0;    // this frame's votes' work so far
+  std::uint64_t detection_budget(float frames) const noexcept;
   float depth_margin_ = 0.0f;  // this frame's measurement's (0 without one)
   Verdict verdict_;            // verifying: this frame's
   bool verdict_taken_ = false;  // and whether its pose was taken

@@ -17,6 +17,7 @@ struct TrackRow {
   Confidence confidence = Confidence::kNone;
   bool reacquired = false;
   double micros = 0;  // kernel time for this frame
+  std::uint64_t work = 0;  // the session's work units for it (SessionResult::work)
 };
 
 // A session's frame as a row: the vote, with the session's pose, state,

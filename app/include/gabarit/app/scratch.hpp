@@ -76,6 +76,7 @@ class FinderBuffers {
   std::vector<OrientedPoint> model_;
   std::vector<std::int32_t> rotated_;
   std::vector<FinderCandidate> candidates_;
+  std::vector<std::uint8_t> held_frame_;  // a search spread over frames holds its first frame
 };
 
 // The focus stack a table carries (format 1.1: the model images it was built

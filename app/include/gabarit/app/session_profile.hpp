@@ -21,7 +21,7 @@ namespace gabarit::app {
 // How a lost target is re-acquired (with recovery on).
 enum class RecoveryKind : std::uint8_t {
   kGrid = 0,       // the grid search around where it was last seen (recovery_search.hpp)
-  kDetection = 1,  // detection over the whole frame after detect_after lost frames (model_finder.hpp)
+  kDetection = 1,  // detection where the target can be after detect_after lost frames (detection_recovery.hpp)
   kParticles = 2,  // a particle filter over the whole frame (particle_recovery.hpp)
   // The default: detection where the session verifies (a table with model
   // images and a grayscale detector, not the plain loop), else the grid.
@@ -70,7 +70,12 @@ struct SessionProfile {
   std::uint32_t search_budget = 0;
   std::uint32_t search_interval = 1;
   std::uint32_t screen_stride = 2;
-  std::uint32_t detect_after = 2;
+  std::uint32_t detect_after = 0;
+  // Detection recovery's work per lost frame, and the look-alike survey's
+  // per tracked frame, in tracked frames' work (SessionOptions::recovery_frames,
+  // survey_frames); 0: the whole search in one frame.
+  std::uint32_t recovery_frames = 0;
+  std::uint32_t survey_frames = 2;
   // Particle recovery: the filter's size, seed, edge measure and improvements.
   std::uint32_t particles = 1000;
   std::uint64_t seed = 1;
@@ -90,7 +95,8 @@ inline constexpr SessionProfile plain_profile() noexcept {
 
 // kInvalidArgument for a profile no session can run: numbers out of the
 // documented ranges (search_budget <= kSearchPlacementCount - kSearchNear, search_interval
-// 1..100, screen_stride 1..16, detect_after <= 1000, particles 1..10^6,
+// 1..100, screen_stride 1..16, detect_after, recovery_frames and
+// survey_frames <= 1000, particles 1..10^6,
 // edge_stride 1..64, edge_tolerance 0..3, known improvement bits), a
 // recovery kind other than the grid without recovery, an alignment subcell
 // without refinement.
@@ -115,7 +121,7 @@ SessionProfile resolve_recovery(const SessionProfile& profile, bool verifying_ta
 // (`shares_search`: its scratch shares the search's features; `has_stack`:
 // it uses the table's focus stack), and the harness's reference runs
 // profile_from_mode_bits of it. The numbers (budget, interval, stride,
-// detect_after, the particle filter's) do not travel: a profile whose numbers
+// detect_after, the detection budgets, the particle filter's) do not travel: a profile whose numbers
 // differ from the defaults sets kModeTuned, and the harness refuses it.
 std::uint32_t mode_bits(const SessionProfile& profile, bool shares_search, bool has_stack) noexcept;
 SessionProfile profile_from_mode_bits(std::uint32_t bits) noexcept;
