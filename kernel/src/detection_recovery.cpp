@@ -205,16 +205,17 @@ Status DetectionRecovery::run(const ImageView& image, const LastSighting& last, 
   out = SearchResult{};
   last_work_ = 0;
   const std::uint32_t n = lost_frames_++;
-  // A new search every interval-th lost frame (or to follow a detection up);
+  // A search begins every interval-th lost frame (or to follow a detection up);
   // one under way goes on.
   const bool going_on = purpose_ == Purpose::kRecovery && search_.active();
   if (!going_on && !following_ && n % interval_ != 0) return Status::kOk;
+  Window window;  // a search under way keeps the one it began with
   if (!going_on) {
     search_begun_ = n;
     // Following: the lead, as far off as the frames since it was seen.
     search_from_ = following_ ? LastSighting{lead_, {}, n - lead_frame_} : last;
+    window = reach_window(image, search_from_, following_ ? kFollowAhead : kSearchAhead);
   }
-  const Window window = following_ ? reach_window(image, search_from_, kFollowAhead) : reach_window(image, last, kSearchAhead);
   Detection found[kReachDetections];
   std::uint32_t count = 0;
   bool done = false;

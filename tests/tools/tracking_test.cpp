@@ -83,21 +83,27 @@ struct GrayScene {
   std::vector<app::PoseSample> truth;
 };
 
+// The astronaut walking over `background`, never hidden.
+host::SceneOptions walking_astronaut(host::SceneBackground background, std::uint32_t frames, std::uint64_t seed) {
+  host::SceneOptions so;
+  so.object = host::SceneObject::kAstronaut;
+  so.background = background;
+  so.motion = host::SceneMotion::kWalk;
+  so.occlusion_side = host::OcclusionSide::kNone;
+  so.frames = frames;
+  so.seed = seed;
+  return so;
+}
+
 // Vote, then verify, on a grayscale scene whose gain swings +-50% every 60
 // frames: in the dim trough the edges fall below the detector's thresholds
 // and the votes are too weak to trust, but the verified pose correlates as
 // a tracked one must, so the frames are measurements and the track is never
 // lost (before, it was lost for about 12 frames of each trough).
 TEST(Tracking, AGrayscaleSessionHoldsThroughAStrongIlluminationSwing) {
-  host::SceneOptions so;
-  so.object = host::SceneObject::kAstronaut;
-  so.background = host::SceneBackground::kBrick;
-  so.motion = host::SceneMotion::kWalk;
-  so.occlusion_side = host::OcclusionSide::kNone;
+  host::SceneOptions so = walking_astronaut(host::SceneBackground::kBrick, 60, 39);
   so.illumination = 0.5;
   so.illumination_period = 60;
-  so.frames = 60;
-  so.seed = 39;
   const GrayScene scene(so, "gabarit_light");
   const TableView table = testing::open_table(scene.bytes);
   const auto& truth = scene.truth;
@@ -120,13 +126,7 @@ TEST(Tracking, AGrayscaleSessionHoldsThroughAStrongIlluminationSwing) {
 // over the first tracked frames: no frame's work is more than a few tracked
 // frames'; in one piece, the first frame costs many.
 TEST(Tracking, TheSurveyForLookalikesIsSpreadOverTheFirstFrames) {
-  host::SceneOptions so;
-  so.object = host::SceneObject::kAstronaut;
-  so.background = host::SceneBackground::kGravel;
-  so.motion = host::SceneMotion::kWalk;
-  so.occlusion_side = host::OcclusionSide::kNone;
-  so.frames = 40;
-  so.seed = 7;
+  const host::SceneOptions so = walking_astronaut(host::SceneBackground::kGravel, 40, 7);
   const GrayScene scene(so, "gabarit_survey");
   const TableView table = testing::open_table(scene.bytes);
   const auto works = [&](std::uint32_t survey_frames) {

@@ -52,7 +52,7 @@ namespace gabarit {
 // and likewise only the angles it can have turned to (the table's theta
 // bound per frame; a full turn is searched only once that reaches half a
 // turn): soon after a loss that is a small part of a wide frame and of the
-// angles, found in a few frames; the area grows with each new search until
+// angles, found in a few frames; the area grows with each later search until
 // it is the frame and every angle. With the scratch's held_frame, a search
 // spread over frames works on the frame it began on (finder_search.hpp);
 // what it finds there, some frames ago, is caught up with: up to
@@ -69,7 +69,7 @@ class DetectionRecovery {
   // finder must outlive the stage; scratch.fine is ignored (the session's is used).
   DetectionRecovery(ModelFinder& finder, const FinderOptions& options, FinderScratch scratch, std::uint32_t interval = 1) noexcept
       : finder_(finder), options_(options), scratch_(scratch), interval_(interval < 1 ? 1 : interval), search_(finder) {}
-  // A new lost period: a recovery search under way is dropped.
+  // A lost period begins: a recovery search under way is dropped.
   void reset() noexcept;
   static constexpr std::uint32_t kReachDetections = 4;
   static constexpr float kLookalikeRatio = 0.9f;
@@ -84,7 +84,7 @@ class DetectionRecovery {
   // a piece of at most `budget` units per call, until surveyed().
   [[nodiscard]] Status survey(const ImageView& image, const Pose& target, TrackerScratch fine, std::uint64_t budget) noexcept;
   bool surveyed() const noexcept { return surveyed_; }
-  // A new session: the look-alikes seen are forgotten and the survey starts afresh.
+  // Another session: the look-alikes seen are forgotten and the survey starts afresh.
   void restart_survey() noexcept;
   // The work of the last run() or survey() (search pieces and votes), in
   // the search's units.
