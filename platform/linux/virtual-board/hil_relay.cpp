@@ -88,6 +88,14 @@ void Relay::on_board_message(const std::vector<std::byte>& m) {
       if (link::decode(payload, p) != Status::kOk) break;
       if (!current_ || p.frame_crc != current_->crc) {
         ++stale_poses_;
+        // The board tracked pixels the harness is not waiting for: its
+        // reference will not see that frame. Say which, for the report.
+        std::string was = "no frame shown lately";
+        for (std::size_t i = 0; i < recent_count_ && i < recent_.size(); ++i)
+          if (recent_[(recent_count_ - 1 - i) % recent_.size()].crc == p.frame_crc)
+            was = "frame " + std::to_string(recent_[(recent_count_ - 1 - i) % recent_.size()].frame_id);
+        log("stale pose: the board's tracked frame %u has CRC-32C %08x (%s); waiting for %s", p.frame_id, p.frame_crc, was.c_str(),
+            current_ ? ("frame " + std::to_string(current_->frame.frame_id)).c_str() : "no frame");
         break;
       }
       // The strobe follows the pose: its edge, if the sampler saw it.
@@ -200,6 +208,7 @@ void Relay::take_frames() {
   Current c;
   c.frame = f;
   c.crc = crc;
+  recent_[recent_count_++ % recent_.size()] = {f.frame_id, crc};
   c.shown = now_us();
   c.deadline = c.shown + 5000000u;
   c.reshow = 0;

@@ -3,6 +3,8 @@
 // relay_faults.cpp.
 #pragma once
 
+#include <array>
+
 #include "relay_parts.hpp"
 
 namespace gabarit::relay {
@@ -89,6 +91,13 @@ class Relay {
     std::uint64_t wraps_before = 0, deadline = 0;
   };
   std::vector<PendingWrap> pending_wraps_;
+  // The frames shown most recently (harness frame, CRC-32C), to name the
+  // pixels of a stale pose in the log.
+  struct ShownFrame {
+    std::uint32_t frame_id = 0, crc = 0;
+  };
+  std::array<ShownFrame, 16> recent_{};
+  std::size_t recent_count_ = 0;
 };
 
 }  // namespace gabarit::relay

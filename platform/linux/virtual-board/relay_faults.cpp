@@ -66,9 +66,13 @@ void Relay::camera_down() {
 }
 
 bool Relay::reload_camera(int absent_ms, bool wrap_sequence, std::string& error) {
-  camera_down();
+  // The capture is disconnected before the output closes: the other way
+  // round, vivid's capture went on streaming for a frame or two without its
+  // loop's input, and the board tracked pixels the harness never sent (its
+  // reference could not follow them; seen as "stale pose" lines in the log).
   std::string ignored;
   (void)vivid::set_control(c_.capture, vivid::kDisconnect, 1, ignored);
+  camera_down();
   // The board closes the device when it sees it gone; until then the module is in use.
   if (!pump_until([&] { return run_command("rmmod vivid 2>/dev/null") == 0; }, 5000))
     return error = "vivid could not be unloaded in 5 s (the board kept it open)", false;
