@@ -1,5 +1,6 @@
 #include "gabarit/app/hosted_session.hpp"
 
+#include <chrono>
 #include <string>
 
 #include "gabarit/app/error.hpp"
@@ -12,6 +13,13 @@ namespace {
 const SessionProfile& checked(const SessionProfile& profile) {
   if (validate(profile) != Status::kOk) throw Error("the session profile is not valid");
   return profile;
+}
+
+// The session's ledger clock (frame_ledger.hpp): nanoseconds of the host's
+// monotonic clock.
+std::uint64_t steady_nanoseconds() noexcept {
+  return static_cast<std::uint64_t>(
+      std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch()).count());
 }
 
 }  // namespace
@@ -66,6 +74,7 @@ bool HostedSession::start(const Pose& initial) {
   }
   start_pose_ = initial;
   session_->use_focus_stack(stack_in_use_);
+  session_->use_clock(&steady_nanoseconds);
   return true;
 }
 

@@ -12,6 +12,8 @@ void fill_row(TrackRow& row, const SessionResult& result) {
   row.confidence = result.confidence;
   row.reacquired = result.reacquired;
   row.work = result.work;
+  row.has_ledger = true;
+  row.ledger = result.ledger;
 }
 
 std::string pose_csv_row(const TrackRow& row) {

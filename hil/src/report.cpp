@@ -76,6 +76,9 @@ struct Figures {
   double overhead_bytes = 0, codec_us = 0;
   std::map<Fate, std::size_t> fates;
   std::size_t sent = 0, poses = 0, matching = 0;
+  // The reference's work per matching frame, by phase (frame_ledger.hpp).
+  std::size_t ledgers = 0;
+  double work[kFramePhaseCount] = {};
 };
 
 Figures figures(const RunResult& result) {
@@ -91,6 +94,10 @@ Figures figures(const RunResult& result) {
     if (!r.pose) continue;
     ++f.poses;
     f.matching += r.reference == 1;
+    if (r.reference == 1 && r.reference_ledger) {
+      ++f.ledgers;
+      for (std::uint32_t p = 0; p < kFramePhaseCount; ++p) f.work[p] += static_cast<double>(r.reference_ledger->work[p]);
+    }
     latency.push_back(r.latency_us);
     if (r.camera_us >= 0) camera.push_back(r.camera_us);
     if (r.track_us >= 0) track.push_back(r.track_us);
@@ -106,7 +113,19 @@ Figures figures(const RunResult& result) {
   f.strobe = summarise(strobe);
   if (clean > 0) f.overhead_bytes = overhead / static_cast<double>(clean);
   if (f.sent > 0) f.codec_us = result.host_codec_seconds * 1e6 / static_cast<double>(f.sent);
+  if (f.ledgers > 0)
+    for (double& w : f.work) w /= static_cast<double>(f.ledgers);
   return f;
+}
+
+// The reference's work per matching frame by phase (null: no reference).
+std::string work_json(const Figures& f) {
+  if (f.ledgers == 0) return "null";
+  std::ostringstream s;
+  s << "{\"frames\": " << f.ledgers;
+  for (std::uint32_t p = 0; p < kFramePhaseCount; ++p) s << ", \"" << frame_phase_name(static_cast<FramePhase>(p)) << "\": " << num(f.work[p], 1);
+  s << "}";
+  return s.str();
 }
 
 std::string latency_json(const LatencySummary& s) {
@@ -200,7 +219,13 @@ namespace {
 // frames.csv, poses.csv, faults.csv and (a soak) soak.csv.
 void write_csvs(const std::filesystem::path& d, const RunConfig& config, const RunResult& result) {
   std::string frames = std::string(app::kPoseCsvHeader) +
-                       ",fate,reason,reference,latency_us,dut_us,cycles,wire_bytes,fault,camera_us,track_us,strobe_us\n";
+                       ",fate,reason,reference,latency_us,dut_us,cycles,wire_bytes,fault,camera_us,track_us,strobe_us";
+  for (std::uint32_t p = 0; p < kFramePhaseCount; ++p) {
+    frames += ',';
+    frames += frame_phase_name(static_cast<FramePhase>(p));
+    frames += "_work";
+  }
+  frames += "\n";
   std::string poses = std::string(app::kPoseCsvHeader) + "\n";
   for (const FrameRecord& r : result.frames) {
     if (r.sent_us < 0 && r.fate == Fate::kPending) continue;  // never reached (a run that stopped early)
@@ -211,7 +236,12 @@ void write_csvs(const std::filesystem::path& d, const RunConfig& config, const R
               (r.pose ? std::to_string(r.pose->cycles) : "") + "," + std::to_string(r.wire_bytes) + "," +
               (r.fault >= 0 ? fault_name(result.faults[static_cast<std::size_t>(r.fault)].kind) : "") + "," +
               (r.camera_us >= 0 ? num(r.camera_us, 0) : "") + "," + (r.track_us >= 0 ? num(r.track_us, 0) : "") + "," +
-              (r.strobe_us >= 0 ? num(r.strobe_us, 0) : "") + "\n";
+              (r.strobe_us >= 0 ? num(r.strobe_us, 0) : "");
+    for (std::uint32_t p = 0; p < kFramePhaseCount; ++p) {
+      frames += ',';
+      if (r.reference_ledger) frames += std::to_string(r.reference_ledger->work[p]);
+    }
+    frames += "\n";
     if (r.pose) poses += pose_columns(r) + "\n";
   }
   app::write_file((d / "frames.csv").string(), frames);
@@ -271,7 +301,7 @@ std::string summary_json(const RunConfig& config, const RunResult& result, const
     << ", \"hung\": " << result.restarts_hung << ", \"crashed\": " << result.restarts_crashed
     << ", \"by_the_rig\": " << result.restarts_reported << "},\n"
     << "  \"latency_us\": " << latency_json(f.latency) << ",\n  \"dut_time_us\": " << latency_json(f.dut)
-    << ",\n  \"voter_cycles\": " << latency_json(f.cycles) << ",\n"
+    << ",\n  \"voter_cycles\": " << latency_json(f.cycles) << ",\n  \"work_per_frame\": " << work_json(f) << ",\n"
     << "  \"stages_us\": {\"camera\": " << latency_json(f.camera) << ", \"track\": " << latency_json(f.track)
     << ", \"strobe\": " << latency_json(f.strobe) << "},\n"
     << "  \"overhead_per_frame\": {\"bytes\": " << num(f.overhead_bytes, 1) << ", \"host_us\": " << num(f.codec_us, 2)
@@ -426,6 +456,13 @@ std::string markdown(const RunConfig& config, const RunResult& result, const Fig
       << num(f.strobe.max, 0) << " |\n";
   if (f.cycles.samples)
     m << "| voter cycles per frame | " << num(f.cycles.p50, 0) << " | " << num(f.cycles.p99, 0) << " | " << num(f.cycles.max, 0) << " |\n";
+  if (f.ledgers > 0) {
+    m << "\nWork per frame by phase (frame_ledger.hpp), counted by the host's reference over the " << f.ledgers
+      << " matching frames (the DUT's own: work is the same on every target):";
+    for (std::uint32_t p = 0; p < kFramePhaseCount; ++p)
+      m << (p ? ", " : " ") << frame_phase_name(static_cast<FramePhase>(p)) << " " << num(f.work[p], 0);
+    m << ".\n";
+  }
   m << "\nProtocol overhead per frame: " << num(f.overhead_bytes, 1)
     << " bytes on the wire beyond the pixels (frames sent once and posed, their POSE included), " << num(f.codec_us, 2)
     << " us of host time (headers, CRC-32C, COBS, per frame sent).\n\n";

@@ -44,10 +44,12 @@ class Reference {
   bool start(const Pose& initial) { return session_.start(initial); }
 
   // "" when the DUT's report is bit-identical to the reference's, else the first field that differs.
-  std::string check(const app::GrayImage& frame, const link::PoseReport& dut) {
+  // `ledger`: the reference's frame-cost ledger for the frame.
+  std::string check(const app::GrayImage& frame, const link::PoseReport& dut, std::optional<FrameLedger>& ledger) {
     SessionResult r;
     if (const Status s = session_.step(frame.view(), r); s != Status::kOk)
       return std::string("the reference failed: ") + status_name(s);
+    ledger = r.ledger;
     const link::PoseReport ref = link::session_report(r);
     const auto bits = [](float f) {
       std::uint32_t b;

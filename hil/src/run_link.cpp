@@ -46,7 +46,7 @@ void Run::resolve(std::uint32_t frame, Fate fate, const std::string& reason, con
     if (it != images_.end()) {
       r.frame_crc_ok = link::frame_crc(it->second.view()) == pose->frame_crc;
       if (reference_) {
-        r.mismatch = reference_->check(it->second, *pose);
+        r.mismatch = reference_->check(it->second, *pose, r.reference_ledger);
         r.reference = r.mismatch.empty() ? 1 : 0;
       }
     }

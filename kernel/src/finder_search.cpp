@@ -50,8 +50,12 @@ bool converged(const Pose& from, const Pose& to) noexcept {
 
 }  // namespace
 
+std::uint64_t track_features_work(const TableView& table) noexcept {
+  return std::uint64_t{table.roi_pixels()} * kUnitsPerRoiPixel;
+}
+
 std::uint64_t track_step_work(const TableView& table, const StepResult& step) noexcept {
-  return std::uint64_t{table.roi_pixels()} * kUnitsPerRoiPixel + step.votes;
+  return track_features_work(table) + step.votes;
 }
 
 std::uint64_t stack_correlation_work(const FocusStack& stack, std::uint32_t correlations) noexcept {

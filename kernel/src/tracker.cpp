@@ -125,7 +125,11 @@ Status prepare_frame(const TableView& table, const Detector& detector, const Ima
     for (std::uint32_t i = 0; i < n; ++i)
       add_channel(table, image, window.x0 + scratch.features[i].col, window.y0 + scratch.features[i].row, 0, scratch.features[i]);
   }
-  out = {cx, cy, n, found.dropped};
+  const auto span = [](std::int32_t at, std::uint32_t length, std::uint32_t limit) -> std::uint32_t {
+    const std::int64_t lo = at < 0 ? 0 : at, hi = std::int64_t{at} + length > limit ? limit : std::int64_t{at} + length;
+    return hi > lo ? static_cast<std::uint32_t>(hi - lo) : 0;
+  };
+  out = {cx, cy, n, found.dropped, span(window.x0, window.width, image.width) * span(window.y0, window.height, image.height)};
   return Status::kOk;
 }
 

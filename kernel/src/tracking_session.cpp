@@ -64,7 +64,8 @@ Status TrackingSession::step(const ImageView& image, SessionScratch scratch, Ses
   ++last_confident_.frames_since;
   verdict_ = Verdict{};
   verdict_taken_ = false;
-  step_work_ = 0;
+  ledger_ = FrameLedger{};
+  const std::uint64_t began = read_ticks(clock_);
   const bool tracking = !lost_;
   GABARIT_TRY(lost_ ? recover(image, scratch, out) : track_fine(image, scratch, out));
   if (verdict_.found) {
@@ -78,6 +79,7 @@ Status TrackingSession::step(const ImageView& image, SessionScratch scratch, Ses
       out.state = TrackState::kAmbiguous;
   }
   out.correlations = verdict_.correlations;
+  const std::uint64_t depth_began = read_ticks(clock_);
   if (verifying()) {
     // The verified pose is already refined in angle; its depth is the
     // best-correlated stack image there (hysteresis: the current depth stays
@@ -103,23 +105,34 @@ Status TrackingSession::step(const ImageView& image, SessionScratch scratch, Ses
     // more than it gained on the microscope scene).
     if (fine_.axis_theta().cells > 1) GABARIT_TRY(angle_by_intensity(image, pose_, *stack_, out.pose.theta_deg));
   }
+  ledger_.add(FramePhase::kDepth, 0, read_ticks(clock_) - depth_began);
   if (out.confidence == Confidence::kHigh) last_confident_ = {pose_, filter_.state(), 0};
-  if (stack_ != nullptr) step_work_ += stack_correlation_work(*stack_, out.correlations);
+  if (stack_ != nullptr) {
+    ledger_.add(FramePhase::kVerify, stack_correlation_work(*stack_, verdict_.correlations), 0);
+    ledger_.add(FramePhase::kDepth, stack_correlation_work(*stack_, out.correlations - verdict_.correlations), 0);
+  }
+  ledger_.correlations = out.correlations;
   if (tracking) {
     // What a tracked frame costs: the budget's measure (integers, so every
     // target budgets alike).
-    frame_work_ = frame_work_ == 0 ? step_work_ : (7 * frame_work_ + step_work_) / 8;
+    const std::uint64_t work = ledger_.total_work();
+    frame_work_ = frame_work_ == 0 ? work : (7 * frame_work_ + work) / 8;
   }
   // Verifying, the survey for look-alikes, a piece after each tracked frame.
   if (detection_ != nullptr && verifying() && !lost_) {
     if (!surveyed_) detection_->restart_survey();
     surveyed_ = true;
     if (!detection_->surveyed()) {
+      const std::uint64_t survey_began = read_ticks(clock_);
       GABARIT_TRY(detection_->survey(image, pose_, scratch.fine, detection_budget(options_.survey_frames)));
-      step_work_ += detection_->last_work();
+      ledger_.add(FramePhase::kSurvey, detection_->last_work(), read_ticks(clock_) - survey_began);
     }
   }
-  out.work = step_work_;
+  // The rest of the step: what no phase above was charged with.
+  const std::uint64_t spent = read_ticks(clock_) - began, charged = ledger_.total_ticks();
+  ledger_.add(FramePhase::kOther, 0, spent > charged ? spent - charged : 0);
+  out.work = ledger_.total_work();
+  out.ledger = ledger_;
   return Status::kOk;
 }
 
@@ -203,7 +216,10 @@ Status TrackingSession::verify_choice(const ImageView& image, const Proposals& p
   const ImageView& model = stack_->images[0];
   const float apart = static_cast<float>(model.width < model.height ? model.width : model.height) / 6.0f;
   if (apart > o.distinct_px) o.distinct_px = apart;
-  GABARIT_TRY(verify(image, *stack_, proposals, o, verdict_));
+  const std::uint64_t began = read_ticks(clock_);
+  const Status verified = verify(image, *stack_, proposals, o, verdict_);
+  ledger_.add(FramePhase::kVerify, 0, read_ticks(clock_) - began);  // its work is counted with the frame's correlations
+  GABARIT_TRY(verified);
   if (!verdict_.found) return Status::kOk;
   verdict_taken_ = !(verified_reference_ > 0.0f) || verdict_.score >= options_.verify_accept * verified_reference_;
   if (!verdict_taken_) return Status::kOk;
@@ -214,10 +230,26 @@ Status TrackingSession::verify_choice(const ImageView& image, const Proposals& p
   return Status::kOk;
 }
 
+Status TrackingSession::vote_at(const ImageView& image, const Pose& centre, TrackerScratch scratch, StepResult& step) noexcept {
+  // Exactly track_step (tracker.cpp), with a clock reading between its halves.
+  const std::uint64_t began = read_ticks(clock_);
+  PreparedFrame frame;
+  GABARIT_TRY(prepare_frame(fine_, detector_, image, centre, scratch, frame));
+  const std::uint64_t prepared = read_ticks(clock_);
+  VoteTally tally;
+  GABARIT_TRY(vote_prepared(fine_, frame, scratch, tally));
+  GABARIT_TRY(finish_frame(fine_, centre, frame, scratch.counters, tally, step));
+  ledger_.add(FramePhase::kFeatures, track_features_work(fine_), prepared - began);
+  ledger_.add(FramePhase::kVote, step.votes, read_ticks(clock_) - prepared);
+  ledger_.pixels_scanned += frame.pixels_scanned;
+  ledger_.features += step.features;
+  ledger_.votes += step.votes;
+  return Status::kOk;
+}
+
 Status TrackingSession::measure_at(const ImageView& image, const Pose& centre, SessionScratch scratch, Measurement& m) noexcept {
   m = Measurement{};
-  GABARIT_TRY(track_step(fine_, detector_, image, centre, scratch.fine, m.step));
-  step_work_ += track_step_work(fine_, m.step);
+  GABARIT_TRY(vote_at(image, centre, scratch.fine, m.step));
   if (verifying()) propose_top_cells(scratch.fine.counters, centre, m);
   GatedChoice choice;
   GABARIT_TRY(filter_.choose(fine_, scratch.fine.counters, centre, m.step.roi_centre_x, m.step.roi_centre_y, pose_.depth, choice));
@@ -265,8 +297,7 @@ Status TrackingSession::track_fine(const ImageView& image, SessionScratch scratc
   const Pose predicted = options_.motion_filter ? filter_.predict(pose_) : pose_;
   if (!options_.motion_filter) {
     // The thesis's loop: the best cell, whatever its score.
-    GABARIT_TRY(track_step(fine_, detector_, image, predicted, scratch.fine, out.step));
-    step_work_ += track_step_work(fine_, out.step);
+    GABARIT_TRY(vote_at(image, predicted, scratch.fine, out.step));
     out.score = out.step.score;
     out.confidence = filter_.grade(out.step.score, normalised_score(out.step.runner_up));
     out.state = out.step.state;
@@ -365,14 +396,17 @@ Status TrackingSession::recover(const ImageView& image, SessionScratch scratch, 
   // The depth last seen with confidence: the frames since, unsure, may have
   // set the pose's depth from clutter.
   const std::uint32_t lost_frame = lost_frames_++;
+  const std::uint64_t began = read_ticks(clock_);
+  std::uint64_t work = 0;  // the grid and particle searches are timed, not counted
   if (detection_ != nullptr && lost_frame >= options_.recovery.detect_after) {
     GABARIT_TRY(detection_->run(image, last_confident_, scratch.fine, detection_budget(options_.recovery_frames), found));
-    step_work_ += detection_->last_work();
+    work = detection_->last_work();
   } else if (particles_ != nullptr) {
     GABARIT_TRY(particles_->run(image, last_confident_, scratch.fine, found));
   } else {
     GABARIT_TRY(search_.run(image, options_.recovery, last_confident_, last_confident_.pose.depth, scratch, found));
   }
+  ledger_.add(FramePhase::kRecovery, work, read_ticks(clock_) - began);
   out.searched_coarse = found.searched_coarse;
   out.state = TrackState::kLost;
   out.pose = pose_;

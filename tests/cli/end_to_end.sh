@@ -36,6 +36,18 @@ for noise in 0 0.3; do
   head -1 "$d/poses.csv" | grep -qx "frame,x,y,theta_deg,depth,votes,score,status" || fail "poses.csv header"
   [ "$(wc -l < "$d/poses.csv")" = 121 ] || fail "poses.csv rows"
   for key in frames per_frame_us mean p50 p99 max; do grep -q "\"$key\"" "$d/stats.json" || fail "stats.json lacks $key"; done
+  # The frame-cost ledger: JSON, every phase, the votes it counts are the run's.
+  python3 - "$d/stats.json" <<'PY' || fail "stats.json's ledger: $(cat "$d/stats.json")"
+import json, sys
+s = json.load(open(sys.argv[1]))
+l = s["ledger"]
+phases = ["features", "vote", "verify", "depth", "recovery", "survey", "other"]
+assert all(l[p]["us_per_frame"] >= 0 and l[p]["work_per_frame"] >= 0 for p in phases), l
+assert l["features"]["us_per_frame"] > 0 and l["vote"]["us_per_frame"] > 0, l
+assert sum(l[p]["us_per_frame"] for p in phases) <= s["per_frame_us"]["mean"] * 1.01 + 0.01, (l, s["per_frame_us"])
+assert l["votes_per_frame"] >= s["votes_per_frame"] and l["vote"]["work_per_frame"] == l["votes_per_frame"], l
+assert l["io"]["us_per_frame"] >= 0 and l["pixels_scanned_per_frame"] > 0, l
+PY
   $g eval --poses "$d/poses.csv" --gt "$d/gt.csv" --require-exact > "$d/acc.json" || fail "not exact at noise $noise: $(cat "$d/acc.json")"
 done
 

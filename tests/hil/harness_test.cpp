@@ -231,6 +231,10 @@ TEST(HilRun, TheInProcessDutMatchesTheReferenceOnEveryFrame) {
       ASSERT_EQ(f.fate, Fate::kPose) << "frame " << f.frame << (udp ? " (udp)" : "");
       ASSERT_EQ(f.reference, 1) << "frame " << f.frame << ": " << f.mismatch;
       ASSERT_TRUE(f.frame_crc_ok);
+      // The reference's work ledger, reported for the DUT: every frame votes.
+      ASSERT_TRUE(f.reference_ledger.has_value());
+      EXPECT_GT(f.reference_ledger->work[static_cast<int>(FramePhase::kVote)], 0u) << "frame " << f.frame;
+      EXPECT_GT(f.reference_ledger->work[static_cast<int>(FramePhase::kFeatures)], 0u) << "frame " << f.frame;
     }
     EXPECT_STREQ(r.caps.kind, "inprocess");
     ASSERT_TRUE(r.dut_stats.has_value());
@@ -369,6 +373,14 @@ TEST(HilReport, WritesEveryFileWithATestcasePerCheckAndFault) {
   const auto poses = app::read_pose_csv((fs::path(dir) / "poses.csv").string());
   EXPECT_EQ(poses.size(), 118u);
   EXPECT_EQ(read_fault_file((fs::path(dir) / "faults.csv").string(), 120).faults.size(), 2u);
+  // The frame-cost ledger: the reference's work per phase, in the summary and per frame.
+  std::ifstream summary(fs::path(dir) / "summary.json");
+  const std::string json((std::istreambuf_iterator<char>(summary)), std::istreambuf_iterator<char>());
+  EXPECT_NE(json.find("\"work_per_frame\": {\"frames\": 118, \"features\": "), std::string::npos) << json;
+  std::ifstream frames(fs::path(dir) / "frames.csv");
+  std::string header;
+  std::getline(frames, header);
+  EXPECT_NE(header.find(",features_work,vote_work,verify_work,depth_work,recovery_work,survey_work,other_work"), std::string::npos) << header;
   fs::remove_all(dir);
 }
 

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "gabarit/app/image_io.hpp"
+#include "gabarit/finder_search.hpp"
 #include "test_tables.hpp"
 
 namespace gabarit {
@@ -146,6 +147,85 @@ TEST(TrackingSession, TheDefaultSessionIsExactWhereThePlainLoopIs) {
     }
     EXPECT_GE(plain_exact, 20);  // the scene is one the plain loop tracks
   }
+}
+
+
+// The frame-cost ledger: its work adds up to the frame's work, each phase is
+// charged where it ran, and timing changes nothing the session computes.
+std::uint64_t counting_ticks = 0;
+std::uint64_t counting_clock() noexcept { return ++counting_ticks; }
+
+TEST(TrackingSession, TheLedgerAddsUpAndTheClockChangesNothing) {
+  app::Rng rng(34);
+  const auto pts = testing::random_points(rng, 120, 14);
+  const auto bytes = build(point_model(pts), "-5:5:11", "-5:5:11");
+  const TableView t = testing::open_table(bytes);
+  Scratch s(t);
+  std::vector<RoiPoint> search_features(search_feature_capacity(t));
+  std::vector<GrayImage> frames;
+  for (int f = 0; f < 40; ++f) {
+    GrayImage frame = testing::draw_points(pts, 60.0f + static_cast<float>(f), 80.0f, 0.0f, 180);
+    if (f >= 12 && f < 24) std::fill(frame.pixels.begin(), frame.pixels.end(), std::uint8_t{0});  // hidden: lost, searched for
+    for (auto& v : frame.pixels)
+      if (rng.bernoulli(0.05)) v = static_cast<std::uint8_t>(255 - v);
+    frames.push_back(frame);
+  }
+  const auto run = [&](TickSource clock) {
+    TrackingSession session(t, nullptr, detector_of(t));
+    session.use_clock(clock);
+    EXPECT_EQ(session.start(SessionOptions{}, Pose{60, 80, 0, 0}), Status::kOk);
+    std::vector<SessionResult> out;
+    for (const GrayImage& frame : frames) {
+      SessionResult r;
+      EXPECT_EQ(session.step(frame.view(), {s.view(), {}, search_features}, r), Status::kOk);
+      out.push_back(r);
+    }
+    return out;
+  };
+  const std::vector<SessionResult> untimed = run(nullptr);
+  counting_ticks = 0;
+  const std::vector<SessionResult> timed = run(&counting_clock);
+  const auto phase = [](const FrameLedger& l, FramePhase p, bool ticks) {
+    return ticks ? l.ticks[static_cast<std::uint32_t>(p)] : l.work[static_cast<std::uint32_t>(p)];
+  };
+  int lost = 0;
+  std::uint64_t all_ticks = 0;
+  for (std::size_t f = 0; f < frames.size(); ++f) {
+    SCOPED_TRACE(f);
+    const SessionResult &a = untimed[f], &b = timed[f];
+    EXPECT_EQ(std::bit_cast<std::uint32_t>(a.pose.x), std::bit_cast<std::uint32_t>(b.pose.x));
+    EXPECT_EQ(std::bit_cast<std::uint32_t>(a.pose.y), std::bit_cast<std::uint32_t>(b.pose.y));
+    EXPECT_EQ(a.state, b.state);
+    EXPECT_EQ(a.work, b.work);
+    EXPECT_EQ(a.ledger.total_ticks(), 0u);  // no clock, nothing timed
+    EXPECT_EQ(b.work, b.ledger.total_work());
+    for (std::uint32_t p = 0; p < kFramePhaseCount; ++p) EXPECT_EQ(a.ledger.work[p], b.ledger.work[p]);
+    // Binary frames: no verification, no intensities, no survey.
+    for (FramePhase p : {FramePhase::kVerify, FramePhase::kDepth, FramePhase::kSurvey}) EXPECT_EQ(phase(b.ledger, p, false), 0u);
+    EXPECT_EQ(b.ledger.correlations, 0u);
+    const bool searched = phase(b.ledger, FramePhase::kRecovery, true) > 0;
+    if (searched) {
+      ++lost;  // the grid search: timed, its votes not counted
+      EXPECT_EQ(phase(b.ledger, FramePhase::kFeatures, true), 0u);
+    } else {
+      // One or two votes (at the prediction, at the last pose): each charged
+      // its ROI's extraction and its votes, and read the clock between.
+      EXPECT_GE(phase(b.ledger, FramePhase::kFeatures, true), 1u);
+      EXPECT_GE(phase(b.ledger, FramePhase::kVote, true), 1u);
+      // No angle axis: the detector's window is the ROI, inside the frame here.
+      const std::uint64_t votes_cast = phase(b.ledger, FramePhase::kFeatures, false) / track_features_work(t);
+      EXPECT_EQ(phase(b.ledger, FramePhase::kFeatures, false), votes_cast * track_features_work(t));
+      EXPECT_GE(votes_cast, 1u);
+      EXPECT_LE(votes_cast, 2u);
+      EXPECT_EQ(b.ledger.pixels_scanned, votes_cast * t.roi_pixels());
+      EXPECT_EQ(phase(b.ledger, FramePhase::kVote, false), b.ledger.votes);
+      EXPECT_GE(b.ledger.votes, b.step.votes);  // the reported vote is one of them
+      EXPECT_GE(b.ledger.features, b.step.features);
+    }
+    all_ticks += b.ledger.total_ticks();
+  }
+  EXPECT_GE(lost, 5);  // the hidden frames searched
+  EXPECT_LE(all_ticks, counting_ticks);  // phases never charged more than the clock advanced
 }
 
 }  // namespace

@@ -152,5 +152,41 @@ TEST(Tracking, TheSurveyForLookalikesIsSpreadOverTheFirstFrames) {
   EXPECT_GT(spread[1], whole[1]);
 }
 
+
+// The frame-cost ledger from the hosted session (gabarit track --stats,
+// bench --suite): every phase a grayscale frame runs is charged, in work
+// and in time, and the phases' time is within the frame's.
+TEST(Tracking, TheFrameLedgerSplitsEachFrameByPhase) {
+  const host::SceneOptions so = walking_astronaut(host::SceneBackground::kGravel, 30, 11);
+  const GrayScene scene(so, "gabarit_ledger");
+  const TableView table = testing::open_table(scene.bytes);
+  host::TrackingOptions options;
+  options.profile = app::SessionProfile{};
+  auto frames_in = app::open_frames((scene.dir / "frames.y4m").string());
+  const auto at = [](const FrameLedger& l, FramePhase p) { return std::pair(l.work[static_cast<int>(p)], l.ticks[static_cast<int>(p)]); };
+  std::uint64_t survey_work = 0;
+  std::size_t rows = 0;
+  host::run_tracking(table, *frames_in, scene.start(), options, [&](const app::TrackRow& r) {
+    SCOPED_TRACE(r.frame);
+    ++rows;
+    ASSERT_TRUE(r.has_ledger);
+    EXPECT_NE(r.step.state, TrackState::kLost);
+    EXPECT_EQ(r.work, r.ledger.total_work());
+    for (FramePhase p : {FramePhase::kFeatures, FramePhase::kVote, FramePhase::kVerify}) {
+      EXPECT_GT(at(r.ledger, p).first, 0u) << frame_phase_name(p);
+      EXPECT_GT(at(r.ledger, p).second, 0u) << frame_phase_name(p);
+    }
+    EXPECT_EQ(at(r.ledger, FramePhase::kRecovery).first, 0u);  // never lost
+    EXPECT_GT(r.ledger.correlations, 0u);
+    EXPECT_GE(r.ledger.votes, r.step.votes);
+    EXPECT_GE(r.io_micros, 0.0);
+    // The clock is read inside the frame's timing (nanoseconds).
+    EXPECT_LE(static_cast<double>(r.ledger.total_ticks()), r.micros * 1000.0 + 1000.0);
+    survey_work += at(r.ledger, FramePhase::kSurvey).first;
+  });
+  EXPECT_EQ(rows, 30u);
+  EXPECT_GT(survey_work, 0u);  // the survey for look-alikes, spread over the first frames
+}
+
 }  // namespace
 }  // namespace gabarit

@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <map>
 #include <sstream>
 
 #include "gabarit/app/error.hpp"
@@ -18,6 +19,7 @@
 #include "gabarit/host/tables/table_builder.hpp"
 #include "gabarit/host/runs/tracking_run.hpp"
 #include "scene_io.hpp"
+#include "suite_ledger.hpp"
 
 namespace gabarit::bench {
 namespace {
@@ -38,11 +40,15 @@ struct Measure {
   int reacquired = 0;           // worst frames to reacquire after an occlusion (-1: never)
   int reacquired_in_reach = 0;  // the same over occlusions the recovery search can reach (-2: none)
   double mean_us = 0, p50_us = 0, p99_us = 0, max_us = 0;
+  // The precision of the frames tracked: the mean position error (px) over
+  // the visible frames within 1 px (-1: none).
+  double subpixel_error = -1;
   // Sessions only: occlusions, those re-acquired (within 2 px) within 10
   // frames, and the frames that searched (lost, or re-acquiring) with their mean time.
   int occlusions = 0, reacquired_within_10 = 0;
   std::size_t search_frames = 0;
   double search_us = 0;
+  LedgerMeans ledger;  // sessions only: the frame-cost ledger's means per frame
 };
 
 // A detector over every frame of a scene, without a starting pose.
@@ -159,6 +165,17 @@ Measure measure(const std::vector<app::PoseSample>& poses, const std::vector<app
     const int r = a.reacquired_after[i];
     m.reacquired_in_reach = (r < 0 || m.reacquired_in_reach == -1) ? -1 : std::max(m.reacquired_in_reach, r);
   }
+  std::map<std::uint32_t, const app::PoseSample*> by_frame;
+  for (const app::PoseSample& p : poses) by_frame[p.frame] = &p;
+  double error_sum = 0;
+  std::size_t close = 0;
+  for (const app::PoseSample& g : truth) {
+    const auto it = by_frame.find(g.frame);
+    if (!g.visible || it == by_frame.end()) continue;
+    const double e = std::hypot(it->second->x - g.x, it->second->y - g.y);
+    if (e < 1.0) error_sum += e, ++close;
+  }
+  if (close > 0) m.subpixel_error = error_sum / static_cast<double>(close);
   const host::TimingSummary t = host::summarise_timing(std::move(micros));
   m.mean_us = t.mean;
   m.p50_us = t.p50;
@@ -214,9 +231,11 @@ SceneResult run_scene(std::uint32_t index, std::uint32_t frames_per_scene, const
     std::vector<app::PoseSample> poses;
     std::vector<double> micros, lost_micros;
     MemoryFrames src(frames);
+    LedgerTally ledger;
     host::run_tracking(table, src, init, options, [&](const app::TrackRow& row) {
       poses.push_back({row.frame, row.step.pose.x, row.step.pose.y, row.step.pose.theta_deg, row.step.pose.depth, true});
       micros.push_back(row.micros);
+      ledger.add(row);
       if (row.step.state == TrackState::kLost || row.reacquired) lost_micros.push_back(row.micros);  // the frames that searched
     });
     out.methods.push_back(measure(poses, truth, micros, depth_counts, in_reach));
@@ -226,6 +245,7 @@ SceneResult run_scene(std::uint32_t index, std::uint32_t frames_per_scene, const
     for (int r : a.reacquired_after) m.reacquired_within_10 += r >= 0 && r <= 10;
     m.search_frames = lost_micros.size();
     for (double v : lost_micros) m.search_us += v / static_cast<double>(lost_micros.size());
+    m.ledger = ledger.means();
     out.names.push_back(name);
   };
   session_run(false, false, kPlain);
@@ -432,6 +452,33 @@ void summary_table(const std::vector<SceneResult>& scenes, const std::string& ti
   }
 }
 
+// Where each session's time goes, per phase (suite_ledger.hpp), and the
+// NCC bank's time over the default session's.
+void ledger_table(const std::vector<SceneResult>& scenes, const std::string& title, std::ostringstream& md) {
+  if (scenes.empty()) return;
+  std::vector<std::pair<std::string, std::vector<LedgerMeans>>> methods;
+  for (std::size_t m = 0; m < scenes[0].methods.size(); ++m) {
+    methods.push_back({scenes[0].names[m], {}});
+    for (const SceneResult& s : scenes) methods.back().second.push_back(s.methods[m].ledger);
+  }
+  bench::ledger_table(title, methods, md);
+  // The speed target (issue: the default session at most 1/30 of the NCC
+  // bank's time on every scene): the ratio scene by scene.
+  for (std::size_t m = 2; m < scenes[0].methods.size(); ++m) {
+    if (scenes[0].names[m] != std::string(kNcc)) continue;
+    std::vector<double> ratios;
+    double worst = 1e300;
+    std::string worst_scene;
+    for (const SceneResult& s : scenes) {
+      const double r = s.methods[m].mean_us / std::max(1e-9, s.methods[1].mean_us);
+      ratios.push_back(r);
+      if (r < worst) worst = r, worst_scene = s.name;
+    }
+    md << "NCC bank time / default session time, scene by scene (means over frames): median " << fmt(median(ratios), 2)
+       << "x, worst " << fmt(worst, 2) << "x (" << worst_scene << ").\n\n";
+  }
+}
+
 }  // namespace
 
 int run_suite(const SuiteOptions& o) {
@@ -449,7 +496,8 @@ int run_suite(const SuiteOptions& o) {
   std::ostringstream detection_csv;
   detection_csv << "index,name,half,detector,visible,top1,top5,invisible,false_frames,mean_us\n";
   csv << "index,name,half,method,within_1px,within_2px,within_1deg,depth_exact,reacquired_after,reacquired_in_reach,mean_us,p99_us,"
-         "within_5px,failures_per_100,p50_us,max_us,family\n";
+         "within_5px,failures_per_100,p50_us,max_us,family";
+  csv << ledger_csv_header() << ",subpixel_error_px\n";
   for (std::uint32_t n = 0; n < scenes; ++n) {
     const std::uint32_t i = o.first + n * stride;
     std::fprintf(stderr, "\rsuite: scene %u/%u %-48s", n + 1, scenes, host::scene_name(host::suite_scene(i, frames)).c_str());
@@ -460,7 +508,9 @@ int run_suite(const SuiteOptions& o) {
       csv << r.index << "," << r.name << "," << (r.held_out ? "held-out" : "tuning") << "," << r.names[m] << "," << fmt(x.within_1px)
           << "," << fmt(x.within_2px) << "," << fmt(x.within_1deg) << "," << (x.depth < 0 ? "" : fmt(x.depth)) << ","
           << x.reacquired << "," << x.reacquired_in_reach << "," << fmt(x.mean_us) << "," << fmt(x.p99_us) << "," << fmt(x.within_5px)
-          << "," << fmt(x.failures_per_100) << "," << fmt(x.p50_us) << "," << fmt(x.max_us) << "," << host::name_of(r.family) << "\n";
+          << "," << fmt(x.failures_per_100) << "," << fmt(x.p50_us) << "," << fmt(x.max_us) << "," << host::name_of(r.family);
+      csv << ledger_csv_columns(x.ledger);  // empty for a method without one (the NCC bank, the particle filter)
+      csv << "," << (x.subpixel_error < 0 ? "" : fmt(x.subpixel_error, 3)) << "\n";
     }
     for (int which = 0; which < 2; ++which) {
       const DetectionMeasure& d = which == 0 ? r.detection : r.opencv_detection;
@@ -483,7 +533,9 @@ int run_suite(const SuiteOptions& o) {
   for (const SceneResult& r : results) (r.held_out ? held_out : tuning).push_back(r);
   md << "## Summary\n\n";
   summary_table(held_out, "Held-out half (never tuned on)", md);
+  ledger_table(held_out, "Held-out half", md);
   summary_table(tuning, "Tuning half", md);
+  ledger_table(tuning, "Tuning half", md);
   md << "## Per scene\n\n| # | scene | family | half | method | 1 px | 2 px | 5 px | 1 deg | depth | failures / 100 | reacquired | in reach "
         "| us/frame mean | p50 | p99 | max |\n|---:|---|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
   for (const SceneResult& r : results)

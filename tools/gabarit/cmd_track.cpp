@@ -144,8 +144,22 @@ struct TrackTally {
   double features = 0, votes = 0;
   std::uint64_t dropped = 0;
   std::size_t lost = 0, uncertain = 0;
+  // The frame-cost ledger summed over the run (frame_ledger.hpp): phase
+  // ticks in nanoseconds (HostedSession's clock), phase work, raw counts.
+  bool ledger = true;  // every row had one
+  FrameLedger sum;
+  double io_micros = 0;
   void add(const app::TrackRow& row) {
     micros.push_back(row.micros);
+    ledger = ledger && row.has_ledger;
+    for (std::uint32_t p = 0; p < kFramePhaseCount; ++p) {
+      sum.add(static_cast<FramePhase>(p), row.ledger.work[p], row.ledger.ticks[p]);
+    }
+    sum.pixels_scanned += row.ledger.pixels_scanned;
+    sum.features += row.ledger.features;
+    sum.votes += row.ledger.votes;
+    sum.correlations += row.ledger.correlations;
+    io_micros += row.io_micros;
     features += row.step.features;
     votes += static_cast<double>(row.step.votes);
     dropped += row.step.features_dropped;
@@ -153,6 +167,24 @@ struct TrackTally {
     uncertain += row.step.state == TrackState::kUncertain;
   }
 };
+
+// The ledger per frame as JSON (null without one: the plain loop on several threads).
+std::string ledger_json(const TrackTally& tally, double n) {
+  if (!tally.ledger || tally.micros.empty()) return "null";
+  std::ostringstream o;
+  o << "{";
+  for (std::uint32_t p = 0; p < kFramePhaseCount; ++p) {
+    o << "\n    \"" << frame_phase_name(static_cast<FramePhase>(p)) << "\": {\"us_per_frame\": "
+      << static_cast<double>(tally.sum.ticks[p]) / 1000.0 / n
+      << ", \"work_per_frame\": " << static_cast<double>(tally.sum.work[p]) / n << "},";
+  }
+  o << "\n    \"io\": {\"us_per_frame\": " << tally.io_micros / n << "},"
+    << "\n    \"pixels_scanned_per_frame\": " << static_cast<double>(tally.sum.pixels_scanned) / n
+    << ",\n    \"features_per_frame\": " << static_cast<double>(tally.sum.features) / n
+    << ",\n    \"votes_per_frame\": " << static_cast<double>(tally.sum.votes) / n
+    << ",\n    \"correlations_per_frame\": " << static_cast<double>(tally.sum.correlations) / n << "\n  }";
+  return o.str();
+}
 
 void report(const app::Args& args, const TableView& table, const TrackTally& tally) {
   const host::TimingSummary t = host::summarise_timing(tally.micros);
@@ -163,11 +195,24 @@ void report(const app::Args& args, const TableView& table, const TrackTally& tal
           << ", \"p99\": " << t.p99 << ", \"max\": " << t.max << "},\n  \"features_per_frame\": " << tally.features / n
           << ",\n  \"votes_per_frame\": " << tally.votes / n << ",\n  \"features_dropped\": " << tally.dropped
           << ",\n  \"lost_frames\": " << tally.lost << ",\n  \"uncertain_frames\": " << tally.uncertain
-          << ",\n  \"table_bytes\": " << table.size_bytes() << ",\n  \"cells\": " << table.cell_count() << "\n}\n";
+          << ",\n  \"table_bytes\": " << table.size_bytes() << ",\n  \"cells\": " << table.cell_count()
+          << ",\n  \"ledger\": " << ledger_json(tally, n) << "\n}\n";
     app::write_file(args.get("--stats"), stats.str());
   }
   std::fprintf(stderr, "tracked %zu frames: %.1f us/frame mean (p50 %.1f, p99 %.1f, max %.1f), %.0f features and %.0f votes per frame, %zu lost\n",
                t.frames, t.mean, t.p50, t.p99, t.max, tally.features / n, tally.votes / n, tally.lost);
+  if (tally.ledger && t.frames > 0) {
+    std::string line = "per frame, us:";
+    for (std::uint32_t p = 0; p < kFramePhaseCount; ++p) {
+      char part[48];
+      std::snprintf(part, sizeof part, " %s %.1f", frame_phase_name(static_cast<FramePhase>(p)),
+                    static_cast<double>(tally.sum.ticks[p]) / 1000.0 / n);
+      line += part;
+    }
+    char io[40];
+    std::snprintf(io, sizeof io, "; reading frames %.1f", tally.io_micros / n);
+    std::fprintf(stderr, "%s%s\n", line.c_str(), io);
+  }
 }
 
 }  // namespace

@@ -41,6 +41,8 @@ namespace gabarit {
 // The work of one track_step with `table` that made `step` (its ROI's
 // feature extraction and its votes), in the search's units.
 std::uint64_t track_step_work(const TableView& table, const StepResult& step) noexcept;
+// Its two terms: the ROI's feature extraction, and the votes (one unit each).
+std::uint64_t track_features_work(const TableView& table) noexcept;
 // The work of `correlations` correlations of a stack image with a frame
 // (depth_by_intensity.hpp), in the same units.
 std::uint64_t stack_correlation_work(const FocusStack& stack, std::uint32_t correlations) noexcept;

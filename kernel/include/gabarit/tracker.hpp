@@ -112,6 +112,9 @@ struct PreparedFrame {
   std::int32_t roi_centre_y = 0;
   std::uint32_t features = 0;          // valid entries at the start of scratch.features
   std::uint32_t features_dropped = 0;
+  // The detector's window inside the image: the ROI, or at an angle the
+  // square that holds it rotated (the cost of extraction, frame_ledger.hpp).
+  std::uint32_t pixels_scanned = 0;
 };
 Status prepare_frame(const TableView& table, const Detector& detector, const ImageView& image, const Pose& previous,
                      TrackerScratch scratch, PreparedFrame& out) noexcept;

@@ -18,6 +18,7 @@
 
 #include "gabarit/depth_by_intensity.hpp"
 #include "gabarit/detection_recovery.hpp"
+#include "gabarit/frame_ledger.hpp"
 #include "gabarit/model_finder.hpp"
 #include "gabarit/motion_filter.hpp"
 #include "gabarit/particle_recovery.hpp"
@@ -132,8 +133,12 @@ struct SessionResult {
   bool reacquired = false;   // this frame ended a lost period
   // What the frame cost, in work units (finder_search.hpp: about a vote
   // each; counted, not timed, so the same on every target): its votes, its
-  // correlations with the focus stack and its detection work.
+  // correlations with the focus stack and its detection work (the grid and
+  // particle recoveries' votes are not counted). Equal to ledger.total_work().
   std::uint64_t work = 0;
+  // The same frame phase by phase, in work and, with a clock, in ticks
+  // (frame_ledger.hpp).
+  FrameLedger ledger;
 };
 
 class TrackingSession {
@@ -162,6 +167,9 @@ class TrackingSession {
   // survey (survey_frames) and each search (recovery_frames) may be spread
   // over frames.
   void use_detection_recovery(DetectionRecovery* stage) noexcept { detection_ = stage; }
+  // With a clock (nullptr to stop), each frame's ledger is timed phase by
+  // phase (SessionResult::ledger); the poses are the same either way.
+  void use_clock(TickSource clock) noexcept { clock_ = clock; }
 
   const Pose& pose() const noexcept { return pose_; }
   const MotionFilterState& motion() const noexcept { return filter_.state(); }
@@ -180,6 +188,8 @@ class TrackingSession {
   };
 
  private:
+  // track_step, its halves timed and charged to the ledger.
+  Status vote_at(const ImageView& image, const Pose& centre, TrackerScratch scratch, StepResult& step) noexcept;
   Status measure_at(const ImageView& image, const Pose& centre, SessionScratch scratch, Measurement& m) noexcept;
   bool theta_observable(std::span<const VoteCounter> counters, std::uint32_t cell) const noexcept;
   bool on_translation_border(std::uint32_t cell) const noexcept;
@@ -212,7 +222,8 @@ class TrackingSession {
   std::uint32_t lost_frames_ = 0;  // frames of this lost period so far
   bool surveyed_ = false;          // the survey for look-alikes begun
   std::uint64_t frame_work_ = 0;   // the running mean of tracked frames' work (0: none yet)
-  std::uint64_t step_work_ = 0;    // this frame's votes' work so far
+  FrameLedger ledger_;             // this frame's so far
+  TickSource clock_ = nullptr;
   std::uint64_t detection_budget(float frames) const noexcept;
   float depth_margin_ = 0.0f;  // this frame's measurement's (0 without one)
   Verdict verdict_;            // verifying: this frame's

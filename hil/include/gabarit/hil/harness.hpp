@@ -13,6 +13,7 @@
 
 #include "gabarit/hil/dut.hpp"
 #include "gabarit/hil/faults.hpp"
+#include "gabarit/frame_ledger.hpp"
 #include "gabarit/link/protocol.hpp"
 #include "gabarit/pose.hpp"
 
@@ -45,6 +46,10 @@ struct FrameRecord {
   double camera_us = -1, track_us = -1, strobe_us = -1;
   int reference = -1;             // 1: bit-identical to the host's reference, 0: not, -1: no pose
   std::string mismatch;           // the first field that differs
+  // The host reference's frame-cost ledger for it (frame_ledger.hpp). Its
+  // work is the DUT's too: work is counted, the same on every target, and
+  // the pose matched. Its ticks are the host's, so only work is reported.
+  std::optional<FrameLedger> reference_ledger;
   bool frame_crc_ok = true;       // the pixels the DUT tracked are the ones sent
   std::uint32_t repeats = 0;      // duplicate arrivals the DUT reported
   int fault = -1;                 // index into RunResult::faults, if faulted

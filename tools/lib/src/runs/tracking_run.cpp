@@ -41,8 +41,11 @@ void run_plain_parallel(const TableView& table, app::FrameSource& frames, const 
   app::GrayImage frame;
   app::TrackRow row;
   Pose pose = init;
-  for (std::uint32_t index = 0; frames.next(frame); ++index) {
+  for (std::uint32_t index = 0;; ++index) {
+    const auto reading = std::chrono::steady_clock::now();
+    if (!frames.next(frame)) break;
     const auto start = std::chrono::steady_clock::now();
+    row.io_micros = std::chrono::duration<double, std::micro>(start - reading).count();
     PreparedFrame prepared;
     VoteTally tally;
     Status status = prepare_frame(table, detector, frame.view(), pose, scratch, prepared);
@@ -79,7 +82,10 @@ void run_tracking(const TableView& table, app::FrameSource& frames, const Pose& 
   app::TrackRow row;
   SessionResult result;
   double detect_micros = 0;  // the frame that found the start: its detection counted in its time
-  for (std::uint32_t index = 0; frames.next(frame); ++index) {
+  for (std::uint32_t index = 0;; ++index) {
+    const auto reading = std::chrono::steady_clock::now();
+    if (!frames.next(frame)) break;
+    const double io_micros = std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - reading).count();
     if (!session.started()) {
       const auto t0 = std::chrono::steady_clock::now();
       bool found = false;
@@ -93,6 +99,9 @@ void run_tracking(const TableView& table, app::FrameSource& frames, const Pose& 
         row = app::TrackRow{};
         row.frame = index;
         row.micros = detect_micros;
+        row.has_ledger = true;  // nothing tracked: the whole frame was the search
+        row.ledger.ticks[static_cast<std::uint32_t>(FramePhase::kRecovery)] = static_cast<std::uint64_t>(detect_micros * 1000.0);
+        row.io_micros = io_micros;
         on_row(row);
         continue;
       }
@@ -105,8 +114,12 @@ void run_tracking(const TableView& table, app::FrameSource& frames, const Pose& 
     }
     row.frame = index;
     row.micros = std::chrono::duration<double, std::micro>(stop - start).count() + detect_micros;
-    detect_micros = 0;
     app::fill_row(row, result);
+    // The detection that found the start is that frame's search: the
+    // ledger's recovery (its ticks are nanoseconds, HostedSession's clock).
+    row.ledger.ticks[static_cast<std::uint32_t>(FramePhase::kRecovery)] += static_cast<std::uint64_t>(detect_micros * 1000.0);
+    detect_micros = 0;
+    row.io_micros = io_micros;
     on_row(row);
   }
 }
