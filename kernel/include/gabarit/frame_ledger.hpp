@@ -5,8 +5,8 @@
 //     as a budget. Their sum is SessionResult::work.
 //   - ticks, timed: read from a clock the caller gives the session
 //     (TrackingSession::use_clock), in that clock's unit (the host's
-//     programs use nanoseconds; firmware may use a cycle counter). Without a
-//     clock every tick count is 0 and nothing is timed.
+//     programs use nanoseconds). Without a clock, and on bare-metal
+//     Cortex-M (kLedgerTimed), every tick count is 0 and nothing is timed.
 // Timing never changes what the session computes: the same frames give the
 // same poses with a clock or without.
 #pragma once
@@ -70,7 +70,24 @@ struct FrameLedger {
   }
 };
 
+// Whether the ledger can be timed on this target. Not on bare-metal
+// Cortex-M: the firmware's stack analysis (platform/cortex-m/firmware_report.py)
+// admits no indirect call, so there the ledger counts work only and every
+// tick is 0 (a cycle counter read directly would be the way to time it).
+#if defined(__ARM_ARCH_PROFILE) && __ARM_ARCH_PROFILE == 'M'
+inline constexpr bool kLedgerTimed = false;
+#else
+inline constexpr bool kLedgerTimed = true;
+#endif
+
 // The clock's reading, 0 without one.
-inline std::uint64_t read_ticks(TickSource clock) noexcept { return clock != nullptr ? clock() : 0; }
+inline std::uint64_t read_ticks(TickSource clock) noexcept {
+  if constexpr (kLedgerTimed) {
+    return clock != nullptr ? clock() : 0;
+  } else {
+    static_cast<void>(clock);
+    return 0;
+  }
+}
 
 }  // namespace gabarit
