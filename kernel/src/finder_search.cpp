@@ -50,9 +50,9 @@ bool converged(const Pose& from, const Pose& to) noexcept {
 
 }  // namespace
 
-std::uint64_t track_features_work(const TableView& table) noexcept {
-  return std::uint64_t{table.roi_pixels()} * kUnitsPerRoiPixel;
-}
+std::uint64_t feature_extraction_work(std::uint64_t pixels) noexcept { return pixels * kUnitsPerRoiPixel; }
+
+std::uint64_t track_features_work(const TableView& table) noexcept { return feature_extraction_work(table.roi_pixels()); }
 
 std::uint64_t track_step_work(const TableView& table, const StepResult& step) noexcept {
   return track_features_work(table) + step.votes;

@@ -1,6 +1,7 @@
 #include "gabarit/particle_recovery.hpp"
 
 #include "gabarit/deterministic_math.hpp"
+#include "gabarit/finder_search.hpp"
 #include "gabarit/voter.hpp"
 
 namespace gabarit {
@@ -41,6 +42,7 @@ Status ParticleRecovery::run(const ImageView& image, const LastSighting& last, T
   for (std::uint32_t m = 0; m < n; ++m) {
     StepResult r;
     GABARIT_TRY(track_step(fine_, detector_, image, modes[m].pose, fine_scratch, r));
+    out.work += track_step_work(fine_, r);
     if (r.best.votes == 0) continue;
     if (!have || ranks_before(r.best, best.best)) best = r, have = true;
   }
@@ -48,6 +50,7 @@ Status ParticleRecovery::run(const ImageView& image, const LastSighting& last, T
   if (!have) return Status::kOk;  // no candidate drew a vote: the vote stays empty (kLost)
   out.from = best.pose;
   GABARIT_TRY(track_step(fine_, detector_, image, out.from, fine_scratch, out.vote));
+  out.work += track_step_work(fine_, out.vote);
   // A strong vote pulls half the next cloud to it.
   if (out.vote.best.votes > 0 && out.vote.state == TrackState::kTracking) filter_.reinitialise_around(out.vote.pose, 0.5f);
   return Status::kOk;

@@ -4,6 +4,7 @@
 
 #include "gabarit/assert.hpp"
 #include "gabarit/deterministic_math.hpp"
+#include "gabarit/finder_search.hpp"
 
 namespace gabarit {
 namespace {
@@ -145,6 +146,7 @@ Status RecoverySearch::run(const ImageView& image, const RecoveryOptions& option
     searched = {round_to_int(centre.x) - r, round_to_int(centre.y) - r, side, side};
     FeatureCount found;
     GABARIT_TRY(extract_features(image, searched, detector_.kind, detector_.threshold, scratch.search_features, found));
+    out.work += feature_extraction_work(std::uint64_t{side} * side);
     // Screening votes every screen_stride-th feature (in raster order): the
     // target, when under a placement's ROI, still stands far above clutter,
     // and the shortlist is voted again in full below.
@@ -167,12 +169,14 @@ Status RecoverySearch::run(const ImageView& image, const RecoveryOptions& option
       VoteTally tally;
       GABARIT_TRY(accumulate_votes_for_cells(fine_, scratch.fine.features.first(frame.features), scratch.fine.counters,
                                              screened.begin, screened.end, tally));
+      out.work += tally.votes;
       const CellScore best = best_cell_in(fine_, scratch.fine.counters, screened);
       trial.best = best;
       trial.score = normalised_score(best);
       trial.pose = pose_of_cell(fine_, best.cell, p, frame.roi_centre_x, frame.roi_centre_y);
     } else {
       GABARIT_TRY(track_step(fine_, detector_, image, p, scratch.fine, trial));
+      out.work += track_step_work(fine_, trial);
     }
     if (trial.best.votes != 0) shortlist.offer(trial.pose, trial.score);
     return Status::kOk;
@@ -183,6 +187,7 @@ Status RecoverySearch::run(const ImageView& image, const RecoveryOptions& option
     // wrong, its stencils being large), and the fine votes decide.
     StepResult coarse_step;
     GABARIT_TRY(track_step(*coarse_, detector_, image, centre, scratch.coarse, coarse_step));
+    out.work += track_step_work(*coarse_, coarse_step);
     out.searched_coarse = true;
     CellScore proposals[kMaxCoarseProposals];
     const std::uint32_t wanted = options.coarse_proposals < coarse_->cell_count() ? options.coarse_proposals : coarse_->cell_count();
@@ -215,6 +220,7 @@ Status RecoverySearch::run(const ImageView& image, const RecoveryOptions& option
   for (int k = 0; k < SearchShortlist::kSize && shortlist.score[k] >= 0.0f; ++k) {
     StepResult again;
     GABARIT_TRY(track_step(fine_, detector_, image, shortlist.pose[k], scratch.fine, again));
+    out.work += track_step_work(fine_, again);
     if (again.score > best) {
       best = again.score;
       from = again.pose;
@@ -223,6 +229,7 @@ Status RecoverySearch::run(const ImageView& image, const RecoveryOptions& option
   // The best voted once more from its own estimate, which centres it better
   // still (and leaves its counters for refinement).
   GABARIT_TRY(track_step(fine_, detector_, image, from, scratch.fine, out.vote));
+  out.work += track_step_work(fine_, out.vote);
   out.from = from;
   return Status::kOk;
 }

@@ -397,16 +397,15 @@ Status TrackingSession::recover(const ImageView& image, SessionScratch scratch, 
   // set the pose's depth from clutter.
   const std::uint32_t lost_frame = lost_frames_++;
   const std::uint64_t began = read_ticks(clock_);
-  std::uint64_t work = 0;  // the grid and particle searches are timed, not counted
   if (detection_ != nullptr && lost_frame >= options_.recovery.detect_after) {
     GABARIT_TRY(detection_->run(image, last_confident_, scratch.fine, detection_budget(options_.recovery_frames), found));
-    work = detection_->last_work();
+    found.work = detection_->last_work();
   } else if (particles_ != nullptr) {
     GABARIT_TRY(particles_->run(image, last_confident_, scratch.fine, found));
   } else {
     GABARIT_TRY(search_.run(image, options_.recovery, last_confident_, last_confident_.pose.depth, scratch, found));
   }
-  ledger_.add(FramePhase::kRecovery, work, read_ticks(clock_) - began);
+  ledger_.add(FramePhase::kRecovery, found.work, read_ticks(clock_) - began);
   out.searched_coarse = found.searched_coarse;
   out.state = TrackState::kLost;
   out.pose = pose_;

@@ -188,7 +188,7 @@ TEST(TrackingSession, TheLedgerAddsUpAndTheClockChangesNothing) {
   const auto phase = [](const FrameLedger& l, FramePhase p, bool ticks) {
     return ticks ? l.ticks[static_cast<std::uint32_t>(p)] : l.work[static_cast<std::uint32_t>(p)];
   };
-  int lost = 0;
+  int lost = 0, searched_work = 0;
   std::uint64_t all_ticks = 0;
   for (std::size_t f = 0; f < frames.size(); ++f) {
     SCOPED_TRACE(f);
@@ -205,7 +205,8 @@ TEST(TrackingSession, TheLedgerAddsUpAndTheClockChangesNothing) {
     EXPECT_EQ(b.ledger.correlations, 0u);
     const bool searched = phase(b.ledger, FramePhase::kRecovery, true) > 0;
     if (searched) {
-      ++lost;  // the grid search: timed, its votes not counted
+      ++lost;  // the grid search: its extraction and votes counted as recovery
+      searched_work += phase(b.ledger, FramePhase::kRecovery, false) > 0;
       EXPECT_EQ(phase(b.ledger, FramePhase::kFeatures, true), 0u);
     } else {
       // One or two votes (at the prediction, at the last pose): each charged
@@ -225,6 +226,7 @@ TEST(TrackingSession, TheLedgerAddsUpAndTheClockChangesNothing) {
     all_ticks += b.ledger.total_ticks();
   }
   EXPECT_GE(lost, 5);  // the hidden frames searched
+  EXPECT_GE(searched_work, 5);
   EXPECT_LE(all_ticks, counting_ticks);  // phases never charged more than the clock advanced
 }
 

@@ -43,6 +43,8 @@ namespace gabarit {
 std::uint64_t track_step_work(const TableView& table, const StepResult& step) noexcept;
 // Its two terms: the ROI's feature extraction, and the votes (one unit each).
 std::uint64_t track_features_work(const TableView& table) noexcept;
+// The work of a tracking detector's extraction over `pixels` pixels.
+std::uint64_t feature_extraction_work(std::uint64_t pixels) noexcept;
 // The work of `correlations` correlations of a stack image with a frame
 // (depth_by_intensity.hpp), in the same units.
 std::uint64_t stack_correlation_work(const FocusStack& stack, std::uint32_t correlations) noexcept;

@@ -125,6 +125,9 @@ struct SearchResult {
   bool searched_coarse = false;
   StepResult vote;              // the final vote of the best candidate (its counters stay in the fine scratch)
   Pose from;                    // the pose that vote was measured from
+  // The search's work units (finder_search.hpp): its feature extraction and
+  // its votes (a particle search's own measures are not counted).
+  std::uint64_t work = 0;
 };
 
 class RecoverySearch {

@@ -133,8 +133,8 @@ struct SessionResult {
   bool reacquired = false;   // this frame ended a lost period
   // What the frame cost, in work units (finder_search.hpp: about a vote
   // each; counted, not timed, so the same on every target): its votes, its
-  // correlations with the focus stack and its detection work (the grid and
-  // particle recoveries' votes are not counted). Equal to ledger.total_work().
+  // correlations with the focus stack and its recovery's work (a particle
+  // recovery's own measures are not counted). Equal to ledger.total_work().
   std::uint64_t work = 0;
   // The same frame phase by phase, in work and, with a clock, in ticks
   // (frame_ledger.hpp).

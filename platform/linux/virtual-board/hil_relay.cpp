@@ -90,10 +90,15 @@ void Relay::on_board_message(const std::vector<std::byte>& m) {
         ++stale_poses_;
         // The board tracked pixels the harness is not waiting for: its
         // reference will not see that frame. Say which, for the report.
+        // The newest shown frame with those pixels (a still scene repeats them).
         std::string was = "no frame shown lately";
-        for (std::size_t i = 0; i < recent_count_ && i < recent_.size(); ++i)
-          if (recent_[(recent_count_ - 1 - i) % recent_.size()].crc == p.frame_crc)
-            was = "frame " + std::to_string(recent_[(recent_count_ - 1 - i) % recent_.size()].frame_id);
+        for (std::size_t i = 0; i < recent_count_ && i < recent_.size(); ++i) {
+          const ShownFrame& shown = recent_[(recent_count_ - 1 - i) % recent_.size()];
+          if (shown.crc == p.frame_crc) {
+            was = "frame " + std::to_string(shown.frame_id);
+            break;
+          }
+        }
         log("stale pose: the board's tracked frame %u has CRC-32C %08x (%s); waiting for %s", p.frame_id, p.frame_crc, was.c_str(),
             current_ ? ("frame " + std::to_string(current_->frame.frame_id)).c_str() : "no frame");
         break;
