@@ -54,6 +54,7 @@ SessionOptions session_options(const SessionProfile& p) noexcept {
     }
   }
   o.verify = !p.plain && p.verify;
+  o.verification.refine_by = p.verify_refine;
   o.align_features = p.subcell == SubCellKind::kAlignment;
   o.recovery.budget = p.search_budget;
   o.recovery.interval = p.search_interval;
@@ -66,14 +67,15 @@ SessionOptions session_options(const SessionProfile& p) noexcept {
 
 namespace {
 
-// The profile's numbers are the defaults (they do not travel in CAPS).
+// The profile's numbers (and the verifier's refinement) are the defaults
+// (they do not travel in CAPS).
 bool default_numbers(const SessionProfile& p) noexcept {
   const SessionProfile d;
   return p.search_budget == d.search_budget && p.search_interval == d.search_interval &&
          p.screen_stride == d.screen_stride && p.detect_after == d.detect_after && p.recovery_frames == d.recovery_frames &&
          p.survey_frames == d.survey_frames && p.particles == d.particles &&
          p.seed == d.seed && p.edge_stride == d.edge_stride && p.edge_tolerance == d.edge_tolerance &&
-         p.particle_improvements_off == d.particle_improvements_off;
+         p.particle_improvements_off == d.particle_improvements_off && p.verify_refine == d.verify_refine;
 }
 
 }  // namespace

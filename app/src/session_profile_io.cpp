@@ -45,6 +45,12 @@ SubCellKind parse_subcell(const std::string& text, const std::string& what) {
   throw UsageError(what + " '" + text + "': want parabola or alignment");
 }
 
+RefineBy parse_verify_refine(const std::string& text, const std::string& what) {
+  if (text == "gauss-newton") return RefineBy::kGaussNewton;
+  if (text == "quadratic") return RefineBy::kQuadraticDesign;
+  throw UsageError(what + " '" + text + "': want gauss-newton or quadratic");
+}
+
 bool parse_bool(const std::string& text, const std::string& what) {
   if (text == "true") return true;
   if (text == "false") return false;
@@ -90,6 +96,9 @@ const Key kKeys[] = {
      [](SessionProfile& p, const std::string& v, const std::string& w) { p.focus_stack = parse_bool(v, w); }},
     {"verify", [](const SessionProfile& p) { return yes(p.verify); },
      [](SessionProfile& p, const std::string& v, const std::string& w) { p.verify = parse_bool(v, w); }},
+    {"verify-refine",
+     [](const SessionProfile& p) { return std::string(p.verify_refine == RefineBy::kQuadraticDesign ? "quadratic" : "gauss-newton"); },
+     [](SessionProfile& p, const std::string& v, const std::string& w) { p.verify_refine = parse_verify_refine(v, w); }},
     {"search-budget", [](const SessionProfile& p) { return std::to_string(p.search_budget); },
      [](SessionProfile& p, const std::string& v, const std::string& w) {
        p.search_budget = static_cast<std::uint32_t>(parse_count(v, w, 0, kSearchPlacementCount - kSearchNear));
@@ -269,6 +278,9 @@ std::vector<Option> session_option_group() {
       {"--no-focus-stack", "", "ignore the table's model images: depth from the winning stencils only"},
       {"--no-verify", "", "the vote's choice as it is: no correlation of the model images to decide between" + indent +
                               "proposals and refine the pose (docs/tracking.md, \"Vote, then verify\")"},
+      {"--verify-refine", "gauss-newton|quadratic", "how verification refines the winner on the correlation: Gauss-Newton" + indent +
+                                                      "steps (default), or a quadratic fitted to 19 correlations a round" + indent +
+                                                      "(several times the cost; docs/tracking.md compares them)"},
       {"--particles", "N", "--recovery particle (and --tracker particle): particles, 1..1000000 (default 1000)"},
       {"--seed", "S", "--recovery particle (and --tracker particle): the generator's seed (default 1); same" + indent +
                           "seed, same output"},
@@ -298,6 +310,7 @@ SessionProfile read_session_profile(const Args& args) {
   if (args.has("--subcell")) p.subcell = parse_subcell(args.get("--subcell"), "--subcell");
   if (args.has("--no-focus-stack")) p.focus_stack = false;
   if (args.has("--no-verify")) p.verify = false;
+  if (args.has("--verify-refine")) p.verify_refine = parse_verify_refine(args.get("--verify-refine"), "--verify-refine");
   number("--search-budget", "search-budget");
   if (args.has("--search-budget") && p.search_budget == 0) throw UsageError("--search-budget '0': want an integer in 1..558");
   number("--search-interval", "search-interval");

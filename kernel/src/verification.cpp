@@ -155,6 +155,50 @@ bool clamp_near(const Pose& anchor, float bound, Pose& pose) noexcept {
   return moved;
 }
 
+float clamp_to(float v, float bound) noexcept { return v > bound ? bound : (v < -bound ? -bound : v); }
+
+// Gauss-Newton ascent from `pose` (scored `score` at the coarse step): each
+// pass scores the pose it is at and gives a step from it. A step that
+// scores no better than the pose it left is halved, twice at most; a step
+// below a hundredth of a pixel ends the ascent. Each step is clamped to one
+// pixel (the angle: one pixel at the outline's reach); x and y stay within
+// `bound_px` of `anchor` and the angle within `bound_deg`. `pose` and
+// `score` end at the best pose scored (at the fine step).
+void ascend(const ImageView& frame, const FocusStack& fine, bool with_angle, float reach_px, const Pose& anchor, float bound_px,
+            float bound_deg, Pose& pose, float& score, std::uint32_t& correlations) noexcept {
+  constexpr float kDegrees = 57.2957795f;
+  const float max_deg = kDegrees / reach_px;
+  Pose at = pose;
+  float dx = 0.0f, dy = 0.0f, dt = 0.0f;
+  bool scored = false;
+  int halvings = 0;
+  const auto step_to = [&](float scale) {
+    at = moved(pose, scale * dx, scale * dy, scale * dt);
+    clamp_near(anchor, bound_px, at);
+    at.theta_deg = anchor.theta_deg + clamp_to(at.theta_deg - anchor.theta_deg, bound_deg);
+    const float tx = at.x - pose.x, ty = at.y - pose.y, tt = (at.theta_deg - pose.theta_deg) * reach_px / kDegrees;
+    return tx * tx + ty * ty + tt * tt >= 1.0e-4f;
+  };
+  for (int pass = 0; pass < kAscentPasses; ++pass) {
+    CorrelationAscent a;
+    correlations += kAscentPassCost;
+    const bool ok = correlation_ascent_at(frame, at, fine, at.depth, with_angle, a);
+    if (!ok && !scored) return;
+    if (!ok || (scored && !(a.signed_r2 > score))) {
+      if (++halvings > 2 || !step_to(0.5f)) return;
+      dx *= 0.5f, dy *= 0.5f, dt *= 0.5f;
+      continue;
+    }
+    scored = true;
+    halvings = 0;
+    pose = at;
+    score = a.signed_r2;
+    if (!a.has_step) return;
+    dx = clamp_to(a.dx, 1.0f), dy = clamp_to(a.dy, 1.0f), dt = clamp_to(a.dtheta_deg, max_deg);
+    if (!step_to(1.0f)) return;
+  }
+}
+
 bool distinct(const Pose& a, const Pose& b, float distance_px) noexcept {
   const float dx = a.x - b.x, dy = a.y - b.y;
   return a.depth != b.depth || dx * dx + dy * dy >= distance_px * distance_px;
@@ -203,18 +247,29 @@ Status verify(const ImageView& frame, const FocusStack& stack, const Proposals& 
     const ImageView& model = stack.images[0];
     FocusStack fine = stack;
     while (fine.step > 1 && (model.width / fine.step) * (model.height / fine.step) < options.refine_samples) --fine.step;
-    float fine_score = 0.0f;
-    ++out.correlations;
-    if (!correlation_at(frame, pose, fine, pose.depth, fine_score)) fine = stack, fine_score = score;
-    // The angle that moves the outline's far points by the spacing.
+    // The outline's reach from the reference point: an angle moves its far
+    // points by the angle (radians) times this. The angle's spacing moves
+    // them by the spacing (0.1 to 1 degree).
     const float reach = 0.5f * static_cast<float>(model.width > model.height ? model.width : model.height);
-    float step_px = options.spacing_px, step_deg = options.spacing_px / reach * 57.2957795f;
-    step_deg = step_deg < 0.1f ? 0.1f : (step_deg > 1.0f ? 1.0f : step_deg);
-    for (int round = 0; round < kRefineRounds; ++round, step_px *= 0.5f, step_deg *= 0.5f) {
-      if (!refine_round(frame, fine, step_px, step_deg, options.refine_angle, pose, fine_score, out.correlations)) break;
-      if (clamp_near(won, options.max_offset_px, pose)) {
-        ++out.correlations;
-        if (!correlation_at(frame, pose, fine, pose.depth, fine_score)) break;
+    float spacing_deg = options.spacing_px / reach * 57.2957795f;
+    spacing_deg = spacing_deg < 0.1f ? 0.1f : (spacing_deg > 1.0f ? 1.0f : spacing_deg);
+    float fine_score = 0.0f;
+    if (options.refine_by == RefineBy::kGaussNewton) {
+      fine_score = score;  // replaced by the first pass's, at the fine step
+      // The angle as far from the winner's as the quadratic design's three
+      // rounds reach (1 + 1/2 + 1/4 spacings).
+      ascend(frame, fine, options.refine_angle, reach, won, options.max_offset_px, 1.75f * spacing_deg, pose, fine_score,
+             out.correlations);
+    } else {
+      ++out.correlations;
+      if (!correlation_at(frame, pose, fine, pose.depth, fine_score)) fine = stack, fine_score = score;
+      float step_px = options.spacing_px, step_deg = spacing_deg;
+      for (int round = 0; round < kRefineRounds; ++round, step_px *= 0.5f, step_deg *= 0.5f) {
+        if (!refine_round(frame, fine, step_px, step_deg, options.refine_angle, pose, fine_score, out.correlations)) break;
+        if (clamp_near(won, options.max_offset_px, pose)) {
+          ++out.correlations;
+          if (!correlation_at(frame, pose, fine, pose.depth, fine_score)) break;
+        }
       }
     }
     if (fine.step != stack.step) {

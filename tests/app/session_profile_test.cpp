@@ -41,6 +41,7 @@ SessionProfile tuned() {
   p.edge_stride = 9;
   p.edge_tolerance = 3;
   p.particle_improvements_off = kImproveModes | kImproveReinit;
+  p.verify_refine = RefineBy::kQuadraticDesign;
   return p;
 }
 
@@ -73,6 +74,7 @@ TEST(SessionProfile, RefusalsNameTheFileAndLine) {
   refused("", "p.profile: empty");
   refused("plain = true\n", "p.profile:1: not a session profile");
   refused("gabarit-session-profile 1\nplain = yes\n", "p.profile:2: plain 'yes'");
+  refused("gabarit-session-profile 1\nverify-refine = newton\n", "p.profile:2: verify-refine 'newton': want gauss-newton or quadratic");
   refused("gabarit-session-profile 1\nspeed = 3\n", "p.profile:2: unknown key 'speed'");
   refused("gabarit-session-profile 1\nseed = 1\nseed = 2\n", "p.profile:3: 'seed' given twice");
   refused("gabarit-session-profile 1\nsearch-interval = 0\n", "p.profile:2: search-interval '0'");

@@ -93,7 +93,57 @@ TEST(Verification, TheTrueProposalWinsAndIsRefinedToATenth) {
     EXPECT_NEAR(v.pose.theta_deg, truth.theta_deg, 0.1f);
     EXPECT_GT(v.score, 0.95f);
     EXPECT_LT(v.runner_up, v.score);
-    EXPECT_GT(v.correlations, 4u + 3u * 19u);  // the proposals, then three rounds
+    EXPECT_LE(v.correlations, 4u + 1u + kAscentPasses * kAscentPassCost);  // the proposals, the Gauss-Newton passes, the score
+  }
+}
+
+// The first refinement, a quadratic fitted to 19 correlations per round,
+// stays available and reaches a tenth too, at several times the cost.
+TEST(Verification, TheQuadraticDesignRefinesToATenthAtMoreCorrelations) {
+  const Stack s(1);
+  const Pose truth{90.37f, 70.81f, 3.3f, 0};
+  const GrayImage frame = frame_at(truth, 0);
+  Proposals p;
+  p.add({90.0f, 71.0f, 3.5f, 0});
+  VerifyOptions o;
+  o.refine_by = RefineBy::kQuadraticDesign;
+  Verdict quadratic, newton;
+  ASSERT_EQ(verify(frame.view(), s.stack, p, o, quadratic), Status::kOk);
+  ASSERT_EQ(verify(frame.view(), s.stack, p, VerifyOptions{}, newton), Status::kOk);
+  for (const Verdict* v : {&quadratic, &newton}) {
+    EXPECT_NEAR(v->pose.x, truth.x, 0.1f);
+    EXPECT_NEAR(v->pose.y, truth.y, 0.1f);
+    EXPECT_NEAR(v->pose.theta_deg, truth.theta_deg, 0.1f);
+  }
+  EXPECT_GT(quadratic.correlations, 1u + 3u * 18u);
+  EXPECT_LT(3u * newton.correlations, quadratic.correlations);
+}
+
+// One Gauss-Newton pass: the correlation it reports is correlation_at's,
+// bit for bit, and its step goes most of the way to the true pose, under a
+// change of gain and offset too (the correlation ignores both).
+TEST(Verification, ACorrelationAscentStepPointsAtTheTruePose) {
+  const Stack s(1);
+  const Pose truth{95.2f, 74.6f, -4.0f, 0};
+  GrayImage frame = frame_at(truth, 0);
+  for (int lit = 0; lit < 2; ++lit) {
+    if (lit == 1)
+      for (std::uint32_t y = 0; y < frame.height; ++y)
+        for (std::uint32_t x = 0; x < frame.width; ++x) frame.at(x, y) = static_cast<std::uint8_t>(20 + frame.at(x, y) * 6 / 10);
+    const Pose start{truth.x - 0.6f, truth.y + 0.5f, truth.theta_deg + 1.0f, 0};
+    CorrelationAscent a;
+    ASSERT_TRUE(correlation_ascent_at(frame.view(), start, s.stack, 0, true, a));
+    float r2 = 0.0f;
+    ASSERT_TRUE(correlation_at(frame.view(), start, s.stack, 0, r2));
+    EXPECT_EQ(a.signed_r2, r2);
+    ASSERT_TRUE(a.has_step);
+    EXPECT_NEAR(start.x + a.dx, truth.x, 0.25f);
+    EXPECT_NEAR(start.y + a.dy, truth.y, 0.25f);
+    EXPECT_NEAR(start.theta_deg + a.dtheta_deg, truth.theta_deg, 0.4f);
+    // Without the angle: x and y only.
+    CorrelationAscent planar;
+    ASSERT_TRUE(correlation_ascent_at(frame.view(), start, s.stack, 0, false, planar));
+    EXPECT_EQ(planar.dtheta_deg, 0.0f);
   }
 }
 

@@ -63,7 +63,8 @@ app::Args declare_track() {
 void refuse_for_particle_tracker(const app::Args& args) {
   for (const char* option : {"--plain", "--motion-filter", "--refine", "--recover", "--recovery", "--subcell", "--coarse",
                              "--search-budget", "--screen-stride", "--search-interval", "--threads", "--focus-stack",
-                             "--no-focus-stack", "--profile", "--detect-after", "--recovery-frames", "--survey-frames"})
+                             "--no-focus-stack", "--profile", "--detect-after", "--recovery-frames", "--survey-frames",
+                             "--verify-refine"})
     if (args.has(option)) throw app::UsageError(std::string(option) + " applies to the stencil tracker, not --tracker particle");
 }
 

@@ -66,6 +66,32 @@ inline constexpr std::uint32_t kMaxStackStep = 256;
 [[nodiscard]] bool correlation_at(const ImageView& frame, const Pose& pose, const FocusStack& stack, std::uint16_t depth,
                                   float& signed_r2) noexcept;
 
+// One Gauss-Newton step up the correlation at `pose`: the enhanced
+// correlation coefficient's maximisation (Evangelidis and Psarakis, "Parametric
+// image alignment using enhanced correlation coefficient maximization", IEEE
+// TPAMI 2008) for a rigid motion (x, y, angle about the reference point): the
+// zero-mean model and frame samples and the zero-mean Jacobian give the
+// closed-form step that maximises the linearised correlation, gain and
+// offset eliminated. The frame's slope in the Jacobian is the model's slope
+// turned through the pose, times the gain between the frame's slope (central
+// differences of the bilinear samples) and the model's, least squares: the
+// clutter's and the noise's slopes, unrelated to the model's, would inflate
+// the curvature and shorten every step (depth_by_intensity.cpp, ecc_step).
+// One pass over the samples gives the step and, from the same exact integer
+// sums, correlation_at's value at `pose` (the same bits). The Jacobian's sums
+// are floats added per model row in one order: the same bits on every target.
+struct CorrelationAscent {
+  float signed_r2 = 0.0f;  // correlation_at's value at the pose
+  bool has_step = false;   // false where the linearised correlation has no maximum (flat, or not correlated)
+  float dx = 0.0f, dy = 0.0f, dtheta_deg = 0.0f;
+};
+// False (as correlation_at) when fewer than 16 samples fall inside the frame
+// or either side is flat. `with_angle` false: x and y only (dtheta 0); where
+// the angle is not observable (a near-circular outline) the step is x and y
+// only too. Preconditions as correlation_at's.
+[[nodiscard]] bool correlation_ascent_at(const ImageView& frame, const Pose& pose, const FocusStack& stack, std::uint16_t depth,
+                                         bool with_angle, CorrelationAscent& out) noexcept;
+
 inline constexpr int kAngleSteps = 2;
 inline constexpr float kAngleIncrementDeg = 0.75f;
 [[nodiscard]] Status angle_by_intensity(const ImageView& frame, const Pose& pose, const FocusStack& stack,

@@ -8,10 +8,11 @@
 // last pose), scores each by the normalised cross-correlation of the model
 // image (the focus stack's image of the proposal's depth) with the frame at
 // that pose, keeps the best, and refines its x, y and angle on the same
-// score: a quadratic fitted by least squares to 19 correlations around it
-// (the centre, six along the axes, twelve on the diagonals of each pair),
-// its peak taken by a Newton step (fixed-size Eigen), twice, at half the
-// spacing the second time. Correlations are exact integer sums
+// score by Gauss-Newton steps (correlation_ascent_at), or as the first
+// refinement did by a quadratic fitted by least squares to 19 correlations
+// around it (the centre, six along the axes, twelve on the diagonals of each
+// pair), its peak taken by a Newton step (fixed-size Eigen), three rounds at
+// halving spacings. Correlations are exact integer sums
 // (depth_by_intensity.hpp), the algebra scalar floats: the same bits on
 // every target.
 //
@@ -41,14 +42,35 @@ struct Proposals {
   void add(const Pose& p) noexcept;
 };
 
+// How the winner is refined on the score.
+enum class RefineBy : std::uint8_t {
+  // Gauss-Newton ascent of the correlation (correlation_ascent_at, the
+  // enhanced correlation coefficient's step): one pass over the samples per
+  // step, at most kAscentPasses.
+  kGaussNewton,
+  // A quadratic fitted by least squares to 19 correlations around the
+  // winner, three rounds at halving spacings (the first refinement; 57
+  // correlations and more).
+  kQuadraticDesign,
+};
+
+inline constexpr int kAscentPasses = 6;
+// A Gauss-Newton pass reads each sample's 4 x 4 frame neighbourhood and the
+// model's neighbours and adds fifteen products: it took about as long as two
+// correlations on the suite (docs/performance.md), so it counts as two in
+// Verdict::correlations.
+inline constexpr std::uint32_t kAscentPassCost = 2;
+
 struct VerifyOptions {
   bool refine = true;  // sub-pixel x, y and sub-degree angle on the score
+  RefineBy refine_by = RefineBy::kGaussNewton;
   // The angle refined too; false where the motion has no rotation (a table
   // without an angle axis): x and y only.
   bool refine_angle = true;
-  // The refinement's first spacing: this many pixels along x and y, and the
-  // angle that moves the model's outline (half its larger side from the
-  // reference point) by as much, within [0.1, 1] degree.
+  // The quadratic design's first spacing: this many pixels along x and y,
+  // and the angle that moves the model's outline (half its larger side from
+  // the reference point) by as much, within [0.1, 1] degree. Either
+  // refinement keeps the angle within 1.75 such angles of the winner's.
   float spacing_px = 0.5f;
   // The refinement samples the model at every stack.step-th pixel, or finer
   // until it has at least this many samples (a small model).

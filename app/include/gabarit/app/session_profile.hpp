@@ -64,6 +64,9 @@ struct SessionProfile {
   // Without plain, with the table's model images: vote, then verify (the
   // best-correlated proposal, refined; docs/tracking.md).
   bool verify = true;
+  // How verification refines the winner: Gauss-Newton on the correlation
+  // (default) or the quadratic fitted to 19 correlations a round.
+  RefineBy verify_refine = RefineBy::kGaussNewton;
   // The recovery search (RecoveryOptions): grid placements beyond the nearest
   // 9 per search (0: all), every n-th lost frame, every n-th feature screens a
   // placement; detection recovery after this many lost frames.
