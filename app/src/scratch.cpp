@@ -10,7 +10,8 @@ namespace gabarit::app {
 TrackerBuffers::TrackerBuffers(const TableView& table, VoterChoice voter)
     : features_(tracker_feature_capacity(table)),
       counters_(voter_counter_count(table.cell_count())),
-      mask_(tracker_mask_bytes(table)) {
+      mask_(tracker_mask_bytes(table)),
+      magnitudes_(tracker_magnitude_entries(table)) {
   const bool fits = table.cell_count() <= kDenseMaxCells;
   if (voter == VoterChoice::kDense && !fits) {
     throw Error("the dense voter takes at most " + std::to_string(kDenseMaxCells) + " cells; this table has " +
@@ -27,7 +28,7 @@ TrackerBuffers::TrackerBuffers(const TableView& table, VoterChoice voter)
   }
 }
 
-TrackerScratch TrackerBuffers::scratch() { return {features_, counters_, mask_, masks_, dense_scratch_, expanded_}; }
+TrackerScratch TrackerBuffers::scratch() { return {features_, counters_, mask_, masks_, dense_scratch_, expanded_, magnitudes_}; }
 
 FinderBuffers::FinderBuffers(const TableView& table, const Detector& detector, const FinderOptions& options,
                              std::uint32_t width, std::uint32_t height)
@@ -41,10 +42,14 @@ FinderBuffers::FinderBuffers(const TableView& table, const Detector& detector, c
   rotated_.resize(2 * n.model_points);
   candidates_.resize(kMaxFinderCandidates);
   held_frame_.resize(std::size_t{width} * height);
+  frame_features_.resize(n.frame_pixels);
+  frame_magnitudes_.resize(n.frame_magnitudes);
 }
 
 FinderScratch FinderBuffers::scratch(TrackerScratch fine) {
-  return {coarse_image_, coarse_features_, feature_index_, accumulator_, model_, rotated_, candidates_, fine, held_frame_};
+  return {coarse_image_,     coarse_features_, feature_index_, accumulator_,    model_,
+          rotated_,          candidates_,     fine,           held_frame_,     frame_features_,
+          frame_magnitudes_};
 }
 
 SessionBuffers::SessionBuffers(const TableView& fine, const TableView* coarse, VoterChoice voter, bool search_features)

@@ -182,51 +182,102 @@ inline std::uint16_t magnitude_at(const ImageView& image, std::int64_t x, std::i
   return gradient_magnitude(image, static_cast<std::uint32_t>(x), static_cast<std::uint32_t>(y));
 }
 
+// A pixel whose magnitude m has passed the low threshold: kept if it is a
+// maximum across the edge (m >= the neighbour ahead, m > the one behind) and
+// strong, or weak with a strong 8-neighbour. at(i, j) is the magnitude at
+// (x + i, y + j); both paths below answer it the same.
+template <typename MagnitudeAt>
+inline bool canny_keeps(std::int32_t gx, std::int32_t gy, std::uint16_t m, std::uint16_t high, const MagnitudeAt& at) noexcept {
+  const std::int32_t ax = abs32(gx), ay = abs32(gy);
+  // Neighbours across the edge: tan(22.5 deg) = 0.41421 in integers.
+  std::int32_t dx = 0, dy = 0;
+  if (std::int64_t{ay} * 100000 <= std::int64_t{ax} * 41421) {
+    dx = 1;  // gradient mostly horizontal
+  } else if (std::int64_t{ay} * 41421 >= std::int64_t{ax} * 100000) {
+    dy = 1;  // mostly vertical
+  } else {
+    dx = 1;
+    dy = (gx > 0) == (gy > 0) ? 1 : -1;
+  }
+  if (m < at(dx, dy) || m <= at(-dx, -dy)) return false;
+  if (m >= high) return true;
+  for (std::int32_t j = -1; j <= 1; ++j)
+    for (std::int32_t i = -1; i <= 1; ++i)
+      if ((i != 0 || j != 0) && at(i, j) >= high) return true;
+  return false;
+}
+
+// Magnitudes of image row y over columns [x_first, x_last], 0 on the image
+// border (as gradient_magnitude).
+void magnitude_row(const ImageView& image, std::int64_t y, std::int64_t x_first, std::int64_t x_last, std::uint16_t* row) noexcept {
+  const std::int64_t inner_first = x_first < 1 ? 1 : x_first;
+  const std::int64_t inner_last = x_last > std::int64_t{image.width} - 2 ? std::int64_t{image.width} - 2 : x_last;
+  for (std::int64_t x = x_first; x <= x_last; ++x) row[x - x_first] = 0;
+  if (y < 1 || y + 1 >= std::int64_t{image.height}) return;
+  const std::uint8_t* up = image.pixels + static_cast<std::size_t>(y - 1) * image.stride;
+  const std::uint8_t* mid = up + image.stride;
+  const std::uint8_t* down = mid + image.stride;
+  for (std::int64_t x = inner_first; x <= inner_last; ++x) {
+    const std::int32_t gx = (up[x + 1] + 2 * mid[x + 1] + down[x + 1]) - (up[x - 1] + 2 * mid[x - 1] + down[x - 1]);
+    const std::int32_t gy = (down[x - 1] + 2 * down[x] + down[x + 1]) - (up[x - 1] + 2 * up[x] + up[x + 1]);
+    row[x - x_first] = static_cast<std::uint16_t>(abs32(gx) + abs32(gy));
+  }
+}
+
 }  // namespace
 
 Status extract_canny(const ImageView& image, const ImageWindow& window, std::uint16_t threshold, std::span<RoiPoint> out,
-                     FeatureCount& count) noexcept {
+                     FeatureCount& count, std::span<std::uint16_t> magnitude_rows) noexcept {
   GABARIT_TRY(check(image, window));
   if (threshold < 2) return Status::kInvalidArgument;  // the low threshold would be 0
   count = {};
   const std::uint16_t high = threshold, low = static_cast<std::uint16_t>(threshold / 2);
   const Span2 s = clip(window, 1, std::int64_t{image.width} - 1, 1, std::int64_t{image.height} - 1);
   if (s.empty()) return Status::kOk;
-  for (std::int64_t y = s.y_begin; y < s.y_end; ++y) {
-    for (std::int64_t x = s.x_begin; x < s.x_end; ++x) {
-      const SobelGradient g = sobel_interior(image, static_cast<std::size_t>(x), static_cast<std::size_t>(y));
-      const std::int32_t gx = g.gx, gy = g.gy;
-      const std::int32_t ax = abs32(gx), ay = abs32(gy);
-      const auto m = static_cast<std::uint16_t>(ax + ay);
-      if (m < low) continue;
-      // Neighbours across the edge: tan(22.5 deg) = 0.41421 in integers.
-      std::int64_t dx = 0, dy = 0;
-      if (std::int64_t{ay} * 100000 <= std::int64_t{ax} * 41421) {
-        dx = 1;  // gradient mostly horizontal
-      } else if (std::int64_t{ay} * 41421 >= std::int64_t{ax} * 100000) {
-        dy = 1;  // mostly vertical
-      } else {
-        dx = 1;
-        dy = (gx > 0) == (gy > 0) ? 1 : -1;
+  const auto columns = static_cast<std::size_t>(s.x_end - s.x_begin) + 2;  // one more on each side
+  if (magnitude_rows.size() < 3 * columns) {
+    // The reference: every magnitude from the image, as often as it is needed.
+    for (std::int64_t y = s.y_begin; y < s.y_end; ++y) {
+      for (std::int64_t x = s.x_begin; x < s.x_end; ++x) {
+        const SobelGradient g = sobel_interior(image, static_cast<std::size_t>(x), static_cast<std::size_t>(y));
+        const auto m = static_cast<std::uint16_t>(abs32(g.gx) + abs32(g.gy));
+        if (m < low) continue;
+        const auto at = [&](std::int32_t i, std::int32_t j) { return magnitude_at(image, x + i, y + j); };
+        if (canny_keeps(g.gx, g.gy, m, high, at)) emit(out, count, window, x, y);
       }
-      if (m < magnitude_at(image, x + dx, y + dy) || m <= magnitude_at(image, x - dx, y - dy)) continue;
-      bool keep = m >= high;
-      for (std::int64_t j = -1; j <= 1 && !keep; ++j)
-        for (std::int64_t i = -1; i <= 1 && !keep; ++i)
-          if ((i != 0 || j != 0) && magnitude_at(image, x + i, y + j) >= high) keep = true;
-      if (keep) emit(out, count, window, x, y);
     }
+    return Status::kOk;
+  }
+  // Rows y - 1, y and y + 1 of magnitudes, columns x_begin - 1 .. x_end.
+  std::uint16_t* rows[3] = {magnitude_rows.data(), magnitude_rows.data() + columns, magnitude_rows.data() + 2 * columns};
+  magnitude_row(image, s.y_begin - 1, s.x_begin - 1, s.x_end, rows[0]);
+  magnitude_row(image, s.y_begin, s.x_begin - 1, s.x_end, rows[1]);
+  for (std::int64_t y = s.y_begin; y < s.y_end; ++y) {
+    magnitude_row(image, y + 1, s.x_begin - 1, s.x_end, rows[2]);
+    for (std::int64_t x = s.x_begin; x < s.x_end; ++x) {
+      const std::int64_t c = x - s.x_begin + 1;
+      const std::uint16_t m = rows[1][c];
+      if (m < low) continue;
+      const SobelGradient g = sobel_interior(image, static_cast<std::size_t>(x), static_cast<std::size_t>(y));
+      const auto at = [&](std::int32_t i, std::int32_t j) { return rows[1 + j][c + i]; };
+      if (canny_keeps(g.gx, g.gy, m, high, at)) emit(out, count, window, x, y);
+    }
+    std::uint16_t* const oldest = rows[0];
+    rows[0] = rows[1];
+    rows[1] = rows[2];
+    rows[2] = oldest;
   }
   return Status::kOk;
 }
 
 Status extract_features(const ImageView& image, const ImageWindow& window, table_format::DetectorKind kind,
-                        std::uint16_t threshold, std::span<RoiPoint> out, FeatureCount& count) noexcept {
+                        std::uint16_t threshold, std::span<RoiPoint> out, FeatureCount& count,
+                        std::span<std::uint16_t> magnitude_rows) noexcept {
   switch (kind) {
     case table_format::DetectorKind::kBinary: return extract_binary(image, window, out, count);
     case table_format::DetectorKind::kGradientRows:
       return extract_gradient_rows(image, window, threshold, out, count);
-    case table_format::DetectorKind::kCanny: return extract_canny(image, window, threshold, out, count);
+    case table_format::DetectorKind::kCanny: return extract_canny(image, window, threshold, out, count, magnitude_rows);
   }
   return Status::kInvalidArgument;
 }

@@ -145,7 +145,8 @@ Status RecoverySearch::run(const ImageView& image, const RecoveryOptions& option
     const auto side = static_cast<std::uint16_t>(2 * reach + 1);
     searched = {round_to_int(centre.x) - r, round_to_int(centre.y) - r, side, side};
     FeatureCount found;
-    GABARIT_TRY(extract_features(image, searched, detector_.kind, detector_.threshold, scratch.search_features, found));
+    GABARIT_TRY(extract_features(image, searched, detector_.kind, detector_.threshold, scratch.search_features, found,
+                                 scratch.fine.magnitudes));
     out.work += feature_extraction_work(std::uint64_t{side} * side);
     // Screening votes every screen_stride-th feature (in raster order): the
     // target, when under a placement's ROI, still stands far above clutter,

@@ -116,7 +116,7 @@ Status prepare_frame(const TableView& table, const Detector& detector, const Ima
   const ImageWindow window = frame_window(table, cx, cy, rotated);
 
   FeatureCount found;
-  GABARIT_TRY(extract_features(image, window, detector.kind, detector.threshold, scratch.features, found));
+  GABARIT_TRY(extract_features(image, window, detector.kind, detector.threshold, scratch.features, found, scratch.magnitudes));
   std::uint32_t n = found.written;
   if (rotated) {
     n = rotate_into_roi(table, image, scratch.features, n, window, cx, cy, sin_cos_deg(previous.theta_deg),

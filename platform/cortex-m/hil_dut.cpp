@@ -39,6 +39,7 @@ constexpr std::size_t kMaxStackDepths = 16;
 RoiPoint g_features[mcu::kFeatureCapacity];
 VoteCounter g_counters[mcu::kCounterCount];
 std::uint8_t g_roi_mask[mcu::kMaskBytes];
+std::uint16_t g_magnitudes[mcu::kMagnitudeEntries];
 std::uint8_t g_frame[link::dut_frame_memory_bytes(1, kMaxFrameBytes)];
 std::byte g_rx[link::message_bytes(kMaxPayload)];
 std::uint8_t g_tx[link::cobs_encoded_capacity(link::message_bytes(link::kMinPayload))];
@@ -110,6 +111,7 @@ class FirmwareDut {
     fine.features = g_features;
     fine.counters = std::span<VoteCounter>(g_counters, voter_counter_count(table_->cell_count()));
     fine.roi_mask = g_roi_mask;
+    fine.magnitudes = g_magnitudes;
     const ImageView image{frame.pixels.data(), frame.width, frame.height, frame.width};
     SessionResult result;
     if (const Status s = session_.step(image, fine, result); s != Status::kOk) {

@@ -19,6 +19,8 @@ inline constexpr std::uint32_t kMaxCells = 4096;
 inline constexpr std::size_t kFeatureCapacity = tracker_feature_capacity(kMaxRoiSide, kMaxRoiSide, kMaxRoiOrigin, kMaxRoiOrigin);
 inline constexpr std::size_t kMaskBytes = tracker_mask_bytes(kMaxRoiSide, kMaxRoiSide);
 inline constexpr std::size_t kCounterCount = voter_counter_count(kMaxCells);
+// The Canny detector's rows of magnitudes (each pixel's gradient computed once).
+inline constexpr std::size_t kMagnitudeEntries = tracker_magnitude_entries(kMaxRoiSide, kMaxRoiSide, kMaxRoiOrigin, kMaxRoiOrigin);
 
 inline bool table_fits(const TableView& table) noexcept {
   return tracker_feature_capacity(table) <= kFeatureCapacity && table.cell_count() <= kMaxCells &&

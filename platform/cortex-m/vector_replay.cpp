@@ -35,6 +35,7 @@ using gabarit::mcu::kMaxCells;
 gabarit::RoiPoint g_features[kFeatureCapacity];
 gabarit::VoteCounter g_counters[gabarit::mcu::kCounterCount];
 std::uint8_t g_roi_mask[kMaskBytes];
+std::uint16_t g_magnitudes[gabarit::mcu::kMagnitudeEntries];
 // The session vectors' focus stack: views of images in flash.
 gabarit::ImageView g_stack_views[gabarit::vectors::kMaxStackDepths];
 
@@ -82,6 +83,7 @@ extern "C" int app_main() {
   scratch.features = g_features;
   scratch.counters = std::span<gabarit::VoteCounter>(g_counters, gabarit::voter_counter_count(table.cell_count()));
   scratch.roi_mask = g_roi_mask;
+  scratch.magnitudes = g_magnitudes;
   gabarit::vectors::Report report;
 
   if (!between(gabarit_vectors, gabarit_vectors_end).empty()) {

@@ -158,5 +158,57 @@ TEST(Canny, WeakEdgesSurviveOnlyNextToStrongOnes) {
   EXPECT_EQ(extract_features(weak.view(), {0, 0, 20, 12}, table_format::DetectorKind::kCanny, 300, out, n), Status::kOk);
 }
 
+// The rows of magnitudes are an optimisation only: on noisy images of awkward
+// sizes, windows that leave the image and feature buffers that overflow, the
+// features, their order and the dropped count are the per-pixel path's.
+TEST(Canny, RowsOfMagnitudesGiveTheReferenceFeaturesBitForBit) {
+  std::uint32_t state = 12345u;
+  const auto next = [&state] {
+    state = state * 1664525u + 1013904223u;
+    return state >> 24;
+  };
+  const std::uint32_t sizes[][2] = {{3, 3}, {1, 9}, {9, 1}, {4, 5}, {37, 23}, {131, 7}, {64, 64}};
+  std::size_t compared = 0, features_seen = 0;
+  for (const auto& size : sizes) {
+    GrayImage img(size[0], size[1]);
+    // Blocks of a few grey levels plus noise: strong, weak and absent edges.
+    for (std::uint32_t y = 0; y < size[1]; ++y)
+      for (std::uint32_t x = 0; x < size[0]; ++x)
+        img.at(x, y) = static_cast<std::uint8_t>(((x / 5 + y / 3) % 3) * 60 + next() % 40);
+    const std::int32_t w = static_cast<std::int32_t>(size[0]), h = static_cast<std::int32_t>(size[1]);
+    const ImageWindow windows[] = {{0, 0, static_cast<std::uint16_t>(w), static_cast<std::uint16_t>(h)},
+                                   {-3, -2, static_cast<std::uint16_t>(w + 6), static_cast<std::uint16_t>(h + 4)},
+                                   {1, 1, static_cast<std::uint16_t>(w > 2 ? w - 2 : 1), static_cast<std::uint16_t>(h > 2 ? h - 2 : 1)},
+                                   {w / 2, h / 3, 5, 4},
+                                   {w - 2, h - 2, 9, 9},
+                                   {w + 4, 0, 3, 3}};
+    for (const ImageWindow& window : windows) {
+      for (const std::uint16_t threshold : {2, 3, 61, 180, 400}) {
+        for (const std::size_t capacity : {std::size_t{3}, feature_capacity(window.width, window.height)}) {
+          std::vector<RoiPoint> reference(capacity), buffered(capacity);
+          FeatureCount n_reference, n_buffered;
+          ASSERT_EQ(extract_canny(img.view(), window, threshold, reference, n_reference), Status::kOk);
+          std::vector<std::uint16_t> rows(canny_scratch_entries(window.width));
+          ASSERT_EQ(extract_canny(img.view(), window, threshold, buffered, n_buffered, rows), Status::kOk);
+          ASSERT_EQ(n_buffered.written, n_reference.written) << size[0] << "x" << size[1] << " threshold " << threshold;
+          ASSERT_EQ(n_buffered.dropped, n_reference.dropped);
+          for (std::uint32_t i = 0; i < n_reference.written; ++i) {
+            ASSERT_EQ(buffered[i].col, reference[i].col);
+            ASSERT_EQ(buffered[i].row, reference[i].row);
+          }
+          // Too few rows: the per-pixel path, the same answer.
+          std::vector<std::uint16_t> short_rows(rows.size() > 0 ? rows.size() - 1 : 0);
+          ASSERT_EQ(extract_canny(img.view(), window, threshold, buffered, n_buffered, short_rows), Status::kOk);
+          ASSERT_EQ(n_buffered.written, n_reference.written);
+          ++compared;
+          features_seen += n_reference.written;
+        }
+      }
+    }
+  }
+  EXPECT_EQ(compared, 7u * 6u * 5u * 2u);
+  EXPECT_GT(features_seen, 1000u) << "the images must have edges for the comparison to mean something";
+}
+
 }  // namespace
 }  // namespace gabarit

@@ -124,6 +124,12 @@ int main() {
     FeatureCount c;
     return extract_gradient_rows(view, window, 100, features, c) == Status::kOk;
   });
+  std::vector<std::uint16_t> magnitude_rows(canny_scratch_entries(window.width));
+  expect_no_allocation("extract_canny", [&] {
+    FeatureCount c, rows_c;
+    return extract_canny(view, window, 100, features, c) == Status::kOk &&
+           extract_canny(view, window, 100, features, rows_c, magnitude_rows) == Status::kOk && rows_c.written == c.written;
+  });
   expect_no_allocation("voting and ranking", [&] {
     FeatureCount c;
     if (extract_binary(view, {32 + table.roi_origin_x(), 32 + table.roi_origin_y(), table.roi_width(), table.roi_height()},

@@ -20,7 +20,7 @@
 //    if one of its 8 neighbours is strong. That is one step of Canny's
 //    hysteresis, which otherwise follows weak chains of any length and needs
 //    a window-sized buffer; this variant needs none.
-// None needs scratch memory.
+// None needs scratch memory; the Canny variant is faster with three rows of it.
 #pragma once
 
 #include <cstddef>
@@ -84,11 +84,20 @@ Status extract_binary(const ImageView& image, const ImageWindow& window, std::sp
 Status extract_gradient_rows(const ImageView& image, const ImageWindow& window, std::uint16_t threshold,
                              std::span<RoiPoint> out, FeatureCount& count) noexcept;
 
+// The Canny variant looks at each pixel's gradient magnitude up to eleven
+// times (its own, two across the edge, eight for the hysteresis). Given
+// canny_scratch_entries(window.width) entries of `magnitude_rows`, it keeps
+// three rows of magnitudes and computes each pixel's once; the features are
+// the same with or without them (the per-pixel path is the reference).
+constexpr std::size_t canny_scratch_entries(std::uint16_t window_width) noexcept {
+  return 3 * (std::size_t{window_width} + 2);
+}
 Status extract_canny(const ImageView& image, const ImageWindow& window, std::uint16_t threshold, std::span<RoiPoint> out,
-                     FeatureCount& count) noexcept;
+                     FeatureCount& count, std::span<std::uint16_t> magnitude_rows = {}) noexcept;
 
-// Dispatches on the detector recorded in a table.
+// Dispatches on the detector recorded in a table; magnitude_rows as extract_canny's.
 Status extract_features(const ImageView& image, const ImageWindow& window, table_format::DetectorKind kind,
-                        std::uint16_t threshold, std::span<RoiPoint> out, FeatureCount& count) noexcept;
+                        std::uint16_t threshold, std::span<RoiPoint> out, FeatureCount& count,
+                        std::span<std::uint16_t> magnitude_rows = {}) noexcept;
 
 }  // namespace gabarit

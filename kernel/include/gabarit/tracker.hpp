@@ -56,6 +56,17 @@ constexpr std::size_t tracker_feature_capacity(std::uint16_t roi_width, std::uin
 constexpr std::size_t tracker_mask_bytes(std::uint16_t roi_width, std::uint16_t roi_height) noexcept {
   return (std::size_t{roi_width} * roi_height + 7) / 8;
 }
+// Optional: the Canny detector's rows of gradient magnitudes over the widest
+// window track_step scans (the rotated ROI's square, or the ROI).
+constexpr std::size_t tracker_magnitude_entries(std::uint16_t roi_width, std::uint16_t roi_height,
+                                                std::int16_t roi_origin_x, std::int16_t roi_origin_y) noexcept {
+  const std::uint32_t side = tracker_window_side(roi_width, roi_height, roi_origin_x, roi_origin_y);
+  const std::uint32_t widest = side > roi_width ? side : roi_width;
+  return canny_scratch_entries(static_cast<std::uint16_t>(widest > 0xFFFFu ? 0xFFFFu : widest));
+}
+inline std::size_t tracker_magnitude_entries(const TableView& t) noexcept {
+  return tracker_magnitude_entries(t.roi_width(), t.roi_height(), t.roi_origin_x(), t.roi_origin_y());
+}
 inline std::size_t tracker_feature_capacity(const TableView& t) noexcept {
   return tracker_feature_capacity(t.roi_width(), t.roi_height(), t.roi_origin_x(), t.roi_origin_y());
 }
@@ -77,6 +88,9 @@ struct TrackerScratch {
   // (voter.hpp, expand_offsets), so the CSR voter skips their decode. Empty:
   // the table's own offsets. Results are bit-identical either way.
   std::span<const std::uint32_t> expanded_offsets = {};
+  // Optional, >= tracker_magnitude_entries(table): the Canny detector computes
+  // each pixel's gradient once (features.hpp). Same features either way.
+  std::span<std::uint16_t> magnitudes = {};
 };
 
 struct StepResult {

@@ -35,6 +35,7 @@ class TrackerBuffers {
   std::vector<std::uint8_t> mask_;
   std::vector<std::uint64_t> masks_, dense_scratch_;
   std::vector<std::uint32_t> expanded_;  // a compact table's offsets, for the CSR voter
+  std::vector<std::uint16_t> magnitudes_;  // the Canny detector's rows of gradient magnitudes
 };
 
 // Scratch for a TrackingSession: the fine table's, the coarse table's when
@@ -77,6 +78,8 @@ class FinderBuffers {
   std::vector<std::int32_t> rotated_;
   std::vector<FinderCandidate> candidates_;
   std::vector<std::uint8_t> held_frame_;  // a search spread over frames holds its first frame
+  std::vector<RoiPoint> frame_features_;  // the fine level's features, detected once per search
+  std::vector<std::uint16_t> frame_magnitudes_;
 };
 
 // The focus stack a table carries (format 1.1: the model images it was built
