@@ -42,14 +42,10 @@ FinderBuffers::FinderBuffers(const TableView& table, const Detector& detector, c
   rotated_.resize(2 * n.model_points);
   candidates_.resize(kMaxFinderCandidates);
   held_frame_.resize(std::size_t{width} * height);
-  frame_features_.resize(n.frame_pixels);
-  frame_magnitudes_.resize(n.frame_magnitudes);
 }
 
 FinderScratch FinderBuffers::scratch(TrackerScratch fine) {
-  return {coarse_image_,     coarse_features_, feature_index_, accumulator_,    model_,
-          rotated_,          candidates_,     fine,           held_frame_,     frame_features_,
-          frame_magnitudes_};
+  return {coarse_image_, coarse_features_, feature_index_, accumulator_, model_, rotated_, candidates_, fine, held_frame_};
 }
 
 SessionBuffers::SessionBuffers(const TableView& fine, const TableView* coarse, VoterChoice voter, bool search_features)

@@ -34,6 +34,44 @@ Status check(const ImageView& image, const ImageWindow& window) noexcept {
 
 inline std::int32_t abs32(std::int32_t v) noexcept { return v < 0 ? -v : v; }
 
+// The columns [xb, xe) of image row y that `keep` covers, widened by two
+// pixels on each side (rounding and float differences between targets then
+// never leave out a covered pixel), within [lo, hi); empty: xb >= xe.
+void kept_columns(const TurnedRectangle* keep, std::int64_t y, std::int64_t lo, std::int64_t hi, std::int64_t& xb,
+                  std::int64_t& xe) noexcept {
+  xb = lo, xe = hi;
+  if (keep == nullptr) return;
+  const float dy = static_cast<float>(y) - keep->centre_y;
+  float from = -1.0e9f, to = 1.0e9f;
+  // a dx + b within [low, high]: an interval of dx (|a| tiny: b decides, a
+  // pixel of slack for the |a dx| < 0.25 left out).
+  const auto bound = [&](float a, float b, float low, float high) {
+    if (a > 1.0e-4f || a < -1.0e-4f) {
+      float p = (low - b) / a, q = (high - b) / a;
+      if (p > q) {
+        const float t = p;
+        p = q, q = t;
+      }
+      from = p > from ? p : from;
+      to = q < to ? q : to;
+    } else if (b < low - 1.0f || b > high + 1.0f) {
+      from = 1.0f, to = 0.0f;
+    }
+  };
+  bound(keep->cos, keep->sin * dy, keep->u_min, keep->u_max);
+  bound(-keep->sin, keep->cos * dy, keep->v_min, keep->v_max);
+  if (from > to) {
+    xe = xb;
+    return;
+  }
+  // Truncation, not floor: one pixel more of margin covers it.
+  const auto b = static_cast<std::int64_t>(keep->centre_x + from) - 3, e = static_cast<std::int64_t>(keep->centre_x + to) + 4;
+  xb = b > lo ? b : lo;
+  xe = e < hi ? e : hi;
+  if (xe < xb) xe = xb;
+}
+
+
 // The 3x3 Sobel operator at an interior pixel (1 <= x < width - 1, likewise
 // y): the one body every detector and every orientation uses.
 inline SobelGradient sobel_interior(const ImageView& image, std::size_t x, std::size_t y) noexcept {
@@ -116,14 +154,17 @@ std::uint8_t edge_orientation_at(const ImageView& img, std::int32_t px, std::int
   return orientation_256(best.gx, best.gy);
 }
 
-Status extract_binary(const ImageView& image, const ImageWindow& window, std::span<RoiPoint> out,
-                      FeatureCount& count) noexcept {
+Status extract_binary(const ImageView& image, const ImageWindow& window, std::span<RoiPoint> out, FeatureCount& count,
+                      const TurnedRectangle* keep) noexcept {
   GABARIT_TRY(check(image, window));
   count = {};
   const Span2 s = clip(window, 0, image.width, 0, image.height);
   if (s.empty()) return Status::kOk;
-  const auto width = static_cast<std::size_t>(s.x_end - s.x_begin);
   for (std::int64_t y = s.y_begin; y < s.y_end; ++y) {
+    std::int64_t xb = 0, xe = 0;
+    kept_columns(keep, y, s.x_begin, s.x_end, xb, xe);
+    const auto width = static_cast<std::size_t>(xe - xb);
+    count.scanned += width;
     const std::uint8_t* row = image.pixels + static_cast<std::size_t>(y) * image.stride;
     if (out.size() - count.written >= width) {
       // Room for a whole row: write every pixel's slot and advance only past
@@ -132,13 +173,13 @@ Status extract_binary(const ImageView& image, const ImageWindow& window, std::sp
       RoiPoint* o = out.data();
       std::uint32_t n = count.written;
       const auto r = static_cast<std::uint16_t>(y - window.y0);
-      for (std::int64_t x = s.x_begin; x < s.x_end; ++x) {
+      for (std::int64_t x = xb; x < xe; ++x) {
         o[n] = {static_cast<std::uint16_t>(x - window.x0), r};
         n += row[x] != 0;
       }
       count.written = n;
     } else {
-      for (std::int64_t x = s.x_begin; x < s.x_end; ++x) {
+      for (std::int64_t x = xb; x < xe; ++x) {
         if (row[x] != 0) emit(out, count, window, x, y);
       }
     }
@@ -154,6 +195,7 @@ Status extract_gradient_rows(const ImageView& image, const ImageWindow& window, 
   // Only interior pixels have a full 3x3 neighbourhood.
   const Span2 s = clip(window, 1, std::int64_t{image.width} - 1, 1, std::int64_t{image.height} - 1);
   if (s.empty()) return Status::kOk;
+  count.scanned = static_cast<std::uint64_t>(s.x_end - s.x_begin) * static_cast<std::uint64_t>(s.y_end - s.y_begin);
   for (std::int64_t y = s.y_begin; y < s.y_end; ++y) {
     bool in_run = false;
     std::uint16_t best = 0;
@@ -227,7 +269,7 @@ void magnitude_row(const ImageView& image, std::int64_t y, std::int64_t x_first,
 }  // namespace
 
 Status extract_canny(const ImageView& image, const ImageWindow& window, std::uint16_t threshold, std::span<RoiPoint> out,
-                     FeatureCount& count, std::span<std::uint16_t> magnitude_rows) noexcept {
+                     FeatureCount& count, std::span<std::uint16_t> magnitude_rows, const TurnedRectangle* keep) noexcept {
   GABARIT_TRY(check(image, window));
   if (threshold < 2) return Status::kInvalidArgument;  // the low threshold would be 0
   count = {};
@@ -235,10 +277,13 @@ Status extract_canny(const ImageView& image, const ImageWindow& window, std::uin
   const Span2 s = clip(window, 1, std::int64_t{image.width} - 1, 1, std::int64_t{image.height} - 1);
   if (s.empty()) return Status::kOk;
   const auto columns = static_cast<std::size_t>(s.x_end - s.x_begin) + 2;  // one more on each side
+  std::int64_t xb = 0, xe = 0;
   if (magnitude_rows.size() < 3 * columns) {
     // The reference: every magnitude from the image, as often as it is needed.
     for (std::int64_t y = s.y_begin; y < s.y_end; ++y) {
-      for (std::int64_t x = s.x_begin; x < s.x_end; ++x) {
+      kept_columns(keep, y, s.x_begin, s.x_end, xb, xe);
+      count.scanned += static_cast<std::uint64_t>(xe - xb);
+      for (std::int64_t x = xb; x < xe; ++x) {
         const SobelGradient g = sobel_interior(image, static_cast<std::size_t>(x), static_cast<std::size_t>(y));
         const auto m = static_cast<std::uint16_t>(abs32(g.gx) + abs32(g.gy));
         if (m < low) continue;
@@ -248,14 +293,31 @@ Status extract_canny(const ImageView& image, const ImageWindow& window, std::uin
     }
     return Status::kOk;
   }
-  // Rows y - 1, y and y + 1 of magnitudes, columns x_begin - 1 .. x_end.
+  // Rows y - 1, y and y + 1 of magnitudes, at columns x_begin - 1 .. x_end
+  // (entry c is column x_begin - 1 + c). A row's magnitudes are computed
+  // where the rows it serves (itself and its neighbours) scan, a column more
+  // on each side: nothing else is read.
+  const std::int64_t base = s.x_begin - 1;
+  const auto fill = [&](std::int64_t k, std::uint16_t* row) {
+    std::int64_t first = s.x_end, last = s.x_begin - 1;
+    for (std::int64_t j = k - 1; j <= k + 1; ++j) {
+      if (j < s.y_begin || j >= s.y_end) continue;
+      kept_columns(keep, j, s.x_begin, s.x_end, xb, xe);
+      if (xb >= xe) continue;
+      first = xb < first ? xb : first;
+      last = xe - 1 > last ? xe - 1 : last;
+    }
+    if (first <= last) magnitude_row(image, k, first - 1, last + 1, row + (first - 1 - base));
+  };
   std::uint16_t* rows[3] = {magnitude_rows.data(), magnitude_rows.data() + columns, magnitude_rows.data() + 2 * columns};
-  magnitude_row(image, s.y_begin - 1, s.x_begin - 1, s.x_end, rows[0]);
-  magnitude_row(image, s.y_begin, s.x_begin - 1, s.x_end, rows[1]);
+  fill(s.y_begin - 1, rows[0]);
+  fill(s.y_begin, rows[1]);
   for (std::int64_t y = s.y_begin; y < s.y_end; ++y) {
-    magnitude_row(image, y + 1, s.x_begin - 1, s.x_end, rows[2]);
-    for (std::int64_t x = s.x_begin; x < s.x_end; ++x) {
-      const std::int64_t c = x - s.x_begin + 1;
+    fill(y + 1, rows[2]);
+    kept_columns(keep, y, s.x_begin, s.x_end, xb, xe);
+    count.scanned += static_cast<std::uint64_t>(xe - xb);
+    for (std::int64_t x = xb; x < xe; ++x) {
+      const std::int64_t c = x - base;
       const std::uint16_t m = rows[1][c];
       if (m < low) continue;
       const SobelGradient g = sobel_interior(image, static_cast<std::size_t>(x), static_cast<std::size_t>(y));
@@ -272,12 +334,12 @@ Status extract_canny(const ImageView& image, const ImageWindow& window, std::uin
 
 Status extract_features(const ImageView& image, const ImageWindow& window, table_format::DetectorKind kind,
                         std::uint16_t threshold, std::span<RoiPoint> out, FeatureCount& count,
-                        std::span<std::uint16_t> magnitude_rows) noexcept {
+                        std::span<std::uint16_t> magnitude_rows, const TurnedRectangle* keep) noexcept {
   switch (kind) {
-    case table_format::DetectorKind::kBinary: return extract_binary(image, window, out, count);
+    case table_format::DetectorKind::kBinary: return extract_binary(image, window, out, count, keep);
     case table_format::DetectorKind::kGradientRows:
       return extract_gradient_rows(image, window, threshold, out, count);
-    case table_format::DetectorKind::kCanny: return extract_canny(image, window, threshold, out, count, magnitude_rows);
+    case table_format::DetectorKind::kCanny: return extract_canny(image, window, threshold, out, count, magnitude_rows, keep);
   }
   return Status::kInvalidArgument;
 }

@@ -94,7 +94,6 @@ Status FinderSearch::begin(std::uint32_t width, std::uint32_t height, const Find
   total_work_ = last_work_ = 0;
   frames_ = 0;
   holding_ = false;
-  frame_features_ = false;
   phase_ = Phase::kCoarseRows;
   return Status::kOk;
 }
@@ -118,7 +117,6 @@ Status FinderSearch::advance(const ImageView& image, FinderScratch scratch, std:
     }
   }
   ++frames_;
-  unlimited_ = budget == kUnlimitedWork;
   if (holding_ && scratch.held_frame.size() < pixels) {
     phase_ = Phase::kIdle;
     return Status::kBufferTooSmall;
@@ -147,7 +145,6 @@ Status FinderSearch::piece(const ImageView& image, FinderScratch& scratch, std::
     case Phase::kRotationLists: spent += rotation_lists(scratch); return Status::kOk;
     case Phase::kRotationVote: spent += rotation_vote(scratch, allowance); return Status::kOk;
     case Phase::kRotationScan: spent += rotation_scan(scratch, allowance); return Status::kOk;
-    case Phase::kFrameFeatures: spent += frame_features(image, scratch, allowance); return Status::kOk;
     case Phase::kFirstVotes: return first_vote(image, scratch, spent);
     case Phase::kConverge: return converge_vote(image, scratch, spent);
     case Phase::kIdle:
@@ -348,8 +345,8 @@ std::uint64_t FinderSearch::rotation_scan(FinderScratch& scratch, std::uint64_t 
   } while (next_ < ch && work + row_work <= allowance);
   if (next_ < ch) return work;
   next_ = rotation_ + 1;
-  phase_ = next_ < g_.rotations ? Phase::kRotationLists : Phase::kFrameFeatures;
-  if (phase_ == Phase::kFrameFeatures) next_ = 0, frame_features_ = false, frame_feature_count_ = 0;
+  phase_ = next_ < g_.rotations ? Phase::kRotationLists : Phase::kFirstVotes;
+  if (phase_ == Phase::kFirstVotes) next_ = 0;
   return work;
 }
 
@@ -476,68 +473,17 @@ Status FinderSearch::finish_candidate(const ImageView& image, FinderScratch& scr
   return Status::kOk;
 }
 
-// The fine level's votes each detect features over their ROI (the rotated
-// ROI's square at an angle), a few per candidate. When the frame holds fewer
-// pixels than two votes per candidate scan, and the detector's features do
-// not depend on the window, the frame's are detected once, a few rows a piece, and each
-// vote maps those of its ROI: the same features, so the same votes. The
-// features must be of the frame every vote sees: the held frame, or this
-// call's when the search ends in it.
-std::uint64_t FinderSearch::frame_features(const ImageView& image, FinderScratch& scratch, std::uint64_t allowance) noexcept {
-  const Detector& detector = finder_.detector();
-  const std::uint64_t pixels = std::uint64_t{width_} * height_;
-  if (next_ == 0) {
-    // A vote at an angle scans the square that holds the rotated ROI; a
-    // candidate takes one to four votes (about three on the scene suite).
-    const std::uint64_t roi_votes = 2 * std::uint64_t{peaks_} * tracker_feature_capacity(finder_.table());
-    frame_features_ = detector.kind != table_format::DetectorKind::kGradientRows && (holding_ || unlimited_) &&
-                      pixels < roi_votes && scratch.frame_features.size() >= pixels && width_ <= 0xFFFFu && height_ <= 0xFFFFu;
-    frame_feature_count_ = 0;
-    frame_features_call_ = frames_;
-    if (!frame_features_) {
-      phase_ = Phase::kFirstVotes;
-      return 1;
-    }
-  }
-  const std::uint64_t row_work = feature_extraction_work(width_);
-  std::uint64_t rows = allowance / row_work;
-  rows = rows < 1 ? 1 : (rows > height_ - next_ ? height_ - next_ : rows);
-  const ImageWindow band{0, static_cast<std::int32_t>(next_), static_cast<std::uint16_t>(width_), static_cast<std::uint16_t>(rows)};
-  const std::span<RoiPoint> out = scratch.frame_features.subspan(frame_feature_count_);
-  FeatureCount found;
-  if (extract_features(image, band, detector.kind, detector.threshold, out, found, scratch.frame_magnitudes) != Status::kOk ||
-      found.dropped != 0) {
-    frame_features_ = false;  // the votes then detect their own
-  } else {
-    for (std::uint32_t i = 0; i < found.written; ++i) out[i].row = static_cast<std::uint16_t>(out[i].row + next_);
-    frame_feature_count_ += found.written;
-  }
-  next_ += static_cast<std::uint32_t>(rows);
-  if (!frame_features_ || next_ >= height_) {
-    next_ = 0;
-    phase_ = Phase::kFirstVotes;
-  }
-  return rows * row_work;
-}
-
-// track_step from `from`, on the frame's features when they were detected;
-// the work of its extraction (the pixels it scans) and its votes.
+// track_step from `from`; the work of its extraction (the pixels it scans:
+// at an angle the rotated ROI's, features.hpp) and its votes.
 Status FinderSearch::fine_vote(const ImageView& image, const Pose& from, FinderScratch& scratch, StepResult& step,
                                std::uint64_t& spent) noexcept {
   const TableView& table = finder_.table();
   PreparedFrame frame;
-  if (!frame_features_ || !(holding_ || frame_features_call_ == frames_)) {
-    // track_step, its extraction counted by the pixels it scans.
-    GABARIT_TRY(prepare_frame(table, finder_.detector(), image, from, scratch.fine, frame));
-    spent += feature_extraction_work(frame.pixels_scanned);
-  } else {
-    const ImageWindow whole{0, 0, static_cast<std::uint16_t>(width_), static_cast<std::uint16_t>(height_)};
-    GABARIT_TRY(map_features(table, image, scratch.frame_features.first(frame_feature_count_), whole, from, scratch.fine, frame));
-  }
+  GABARIT_TRY(prepare_frame(table, finder_.detector(), image, from, scratch.fine, frame));
   VoteTally tally;
   GABARIT_TRY(vote_prepared(table, frame, scratch.fine, tally));
   GABARIT_TRY(finish_frame(table, from, frame, scratch.fine.counters, tally, step));
-  spent += step.votes;
+  spent += feature_extraction_work(frame.pixels_scanned) + step.votes;
   return Status::kOk;
 }
 

@@ -139,9 +139,6 @@ FinderScratchSizes finder_scratch_sizes(const FinderGeometry& g, const TableView
   s.accumulator = (std::size_t{g.coarse_width} + 2 * g.pad) * (std::size_t{g.coarse_height} + 2 * g.pad);
   for (std::uint16_t d = 0; d < table.depth_count(); ++d)
     s.model_points = table.model_point_count(d) > s.model_points ? table.model_point_count(d) : s.model_points;
-  s.frame_pixels = std::size_t{g.coarse_width} * g.factor * g.coarse_height * g.factor;
-  s.frame_magnitudes = canny_scratch_entries(static_cast<std::uint16_t>(
-      std::size_t{g.coarse_width} * g.factor > 0xFFFFu ? 0xFFFFu : std::size_t{g.coarse_width} * g.factor));
   return s;
 }
 

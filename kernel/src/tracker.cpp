@@ -116,20 +116,28 @@ Status prepare_frame(const TableView& table, const Detector& detector, const Ima
   const ImageWindow window = frame_window(table, cx, cy, rotated);
 
   FeatureCount found;
-  GABARIT_TRY(extract_features(image, window, detector.kind, detector.threshold, scratch.features, found, scratch.magnitudes));
+  // At an angle, only the pixels that can land in the ROI (roi_pixel_of:
+  // a turned offset that rounds into it) need scanning, not the whole square.
+  const SinCos sc = sin_cos_deg(previous.theta_deg);
+  const TurnedRectangle roi{static_cast<float>(cx),
+                            static_cast<float>(cy),
+                            sc.cos,
+                            sc.sin,
+                            static_cast<float>(table.roi_origin_x()) - 0.5f,
+                            static_cast<float>(table.roi_origin_x() + table.roi_width()) - 0.5f,
+                            static_cast<float>(table.roi_origin_y()) - 0.5f,
+                            static_cast<float>(table.roi_origin_y() + table.roi_height()) - 0.5f};
+  GABARIT_TRY(extract_features(image, window, detector.kind, detector.threshold, scratch.features, found, scratch.magnitudes,
+                               rotated ? &roi : nullptr));
   std::uint32_t n = found.written;
   if (rotated) {
-    n = rotate_into_roi(table, image, scratch.features, n, window, cx, cy, sin_cos_deg(previous.theta_deg),
-                        half_turn_steps(previous.theta_deg), scratch.roi_mask);
+    n = rotate_into_roi(table, image, scratch.features, n, window, cx, cy, sc, half_turn_steps(previous.theta_deg),
+                        scratch.roi_mask);
   } else if (table.channel_bits() != 0) {
     for (std::uint32_t i = 0; i < n; ++i)
       add_channel(table, image, window.x0 + scratch.features[i].col, window.y0 + scratch.features[i].row, 0, scratch.features[i]);
   }
-  const auto span = [](std::int32_t at, std::uint32_t length, std::uint32_t limit) -> std::uint32_t {
-    const std::int64_t lo = at < 0 ? 0 : at, hi = std::int64_t{at} + length > limit ? limit : std::int64_t{at} + length;
-    return hi > lo ? static_cast<std::uint32_t>(hi - lo) : 0;
-  };
-  out = {cx, cy, n, found.dropped, span(window.x0, window.width, image.width) * span(window.y0, window.height, image.height)};
+  out = {cx, cy, n, found.dropped, static_cast<std::uint32_t>(found.scanned)};
   return Status::kOk;
 }
 

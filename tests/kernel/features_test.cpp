@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <vector>
 
 #include "gabarit/app/image_io.hpp"
@@ -208,6 +209,73 @@ TEST(Canny, RowsOfMagnitudesGiveTheReferenceFeaturesBitForBit) {
   }
   EXPECT_EQ(compared, 7u * 6u * 5u * 2u);
   EXPECT_GT(features_seen, 1000u) << "the images must have edges for the comparison to mean something";
+}
+
+// A turned rectangle to keep (a tracker's rotated ROI): of each row only the
+// columns it covers are scanned. The features are a subsequence of the whole
+// window's that holds every one within the rectangle: Canny's the same with
+// rows of magnitudes or without, and the binary detector's likewise.
+TEST(Canny, ARotatedRectangleScansLessAndKeepsEveryFeatureInIt) {
+  std::uint32_t state = 777u;
+  const auto next = [&state] {
+    state = state * 1664525u + 1013904223u;
+    return state >> 24;
+  };
+  GrayImage img(97, 83);
+  for (std::uint32_t y = 0; y < img.height; ++y)
+    for (std::uint32_t x = 0; x < img.width; ++x)
+      img.at(x, y) = static_cast<std::uint8_t>(((x / 4 + y / 6) % 3) * 70 + next() % 30);
+  std::size_t inside_total = 0, kept_total = 0, whole_total = 0;
+  const float angles[] = {0.0f, 0.003f, 0.5f, 1.0f, 1.5707963f, 2.6f, -0.7f, 3.1415926f};
+  for (const float angle : angles) {
+    for (const ImageWindow window : {ImageWindow{-5, -5, 110, 95}, ImageWindow{20, 10, 60, 60}, ImageWindow{70, 60, 50, 40}}) {
+      const TurnedRectangle keep{48.0f, 41.0f, std::cos(angle), std::sin(angle), -20.5f, 17.5f, -9.5f, 12.5f};
+      const std::size_t capacity = feature_capacity(window.width, window.height);
+      std::vector<RoiPoint> whole(capacity), kept(capacity), kept_rows(capacity);
+      std::vector<std::uint16_t> rows(canny_scratch_entries(window.width));
+      FeatureCount n_whole, n_kept, n_rows;
+      ASSERT_EQ(extract_canny(img.view(), window, 60, whole, n_whole), Status::kOk);
+      ASSERT_EQ(extract_canny(img.view(), window, 60, kept, n_kept, {}, &keep), Status::kOk);
+      ASSERT_EQ(extract_canny(img.view(), window, 60, kept_rows, n_rows, rows, &keep), Status::kOk);
+      ASSERT_EQ(n_rows.written, n_kept.written);
+      for (std::uint32_t i = 0; i < n_kept.written; ++i) {
+        ASSERT_EQ(kept_rows[i].col, kept[i].col);
+        ASSERT_EQ(kept_rows[i].row, kept[i].row);
+      }
+      // The binary detector on the same image (its brighter pixels).
+      GrayImage bright = img;
+      for (auto& v : bright.pixels) v = v >= 140 ? 255 : 0;
+      std::vector<RoiPoint> binary_whole(capacity), binary_kept(capacity);
+      FeatureCount b_whole, b_kept;
+      ASSERT_EQ(extract_binary(bright.view(), window, binary_whole, b_whole), Status::kOk);
+      ASSERT_EQ(extract_binary(bright.view(), window, binary_kept, b_kept, &keep), Status::kOk);
+      EXPECT_LT(b_kept.scanned, b_whole.scanned);
+      std::uint32_t j = 0;
+      for (std::uint32_t i = 0; i < b_whole.written && j < b_kept.written; ++i)
+        if (binary_whole[i].col == binary_kept[j].col && binary_whole[i].row == binary_kept[j].row) ++j;
+      EXPECT_EQ(j, b_kept.written) << "the binary features kept are a subsequence of the window's";
+      EXPECT_LT(n_kept.scanned, n_whole.scanned);
+      // A subsequence of the whole window's, missing none within the rectangle.
+      std::uint32_t k = 0;
+      for (std::uint32_t i = 0; i < n_whole.written; ++i) {
+        const float dx = static_cast<float>(window.x0 + whole[i].col) - keep.centre_x;
+        const float dy = static_cast<float>(window.y0 + whole[i].row) - keep.centre_y;
+        const float u = keep.cos * dx + keep.sin * dy, v = -keep.sin * dx + keep.cos * dy;
+        const bool inside = u >= keep.u_min && u <= keep.u_max && v >= keep.v_min && v <= keep.v_max;
+        const bool listed = k < n_kept.written && kept[k].col == whole[i].col && kept[k].row == whole[i].row;
+        if (listed) ++k;
+        if (inside) {
+          EXPECT_TRUE(listed) << "angle " << angle << " feature " << whole[i].col << "," << whole[i].row;
+          ++inside_total;
+        }
+      }
+      EXPECT_EQ(k, n_kept.written) << "every kept feature is one of the whole window's, in order";
+      kept_total += n_kept.written;
+      whole_total += n_whole.written;
+    }
+  }
+  EXPECT_GT(inside_total, 500u);
+  EXPECT_LT(kept_total, whole_total * 3 / 4) << "the rectangle is smaller than the windows: less is scanned";
 }
 
 }  // namespace

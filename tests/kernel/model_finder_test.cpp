@@ -227,12 +227,7 @@ TEST(DetectionRecovery, ASearchSpreadOverFramesBoundsEachFrameAndStillFindsTheTa
   EXPECT_LE(spread.most_lost_work, 6 * spread.tracked_work);
   EXPECT_GE(whole.frames, 1);
   EXPECT_GT(spread.frames, whole.frames);
-  // 30 when each fine vote detected its own features (pieces of about 20000
-  // units, so frames overshot their budget); with the frame's detected once
-  // the pieces are smaller, frames keep nearer their budget (the first
-  // search takes 6 frames instead of 5) and the searches' windows meet the
-  // reappearance later.
-  EXPECT_LE(spread.frames, 34);
+  EXPECT_LE(spread.frames, 30);
 }
 
 TEST(DetectionRecovery, ALookalikeSeenBoundsWhereTheTargetIsTakenAgain) {

@@ -123,36 +123,43 @@ namespace gabarit {
 namespace {
 
 // map_features on features detected once over a large window gives exactly
-// prepare_frame's features (binary detector: nothing depends on the window),
-// at any angle and wherever the ROI sits in the window, even half outside
-// the image.
+// prepare_frame's features for the detectors whose features do not depend on
+// the window (binary; Canny, which at an angle scans only the rotated ROI's
+// columns, with rows of magnitudes or without), at any angle and wherever the
+// ROI sits in the window, even half outside the image.
 TEST(MapFeatures, MatchesPrepareFrameForAWindowIndependentDetector) {
   app::Rng rng(77);
   const auto pts = testing::random_points(rng, 40, 12);
   const auto bytes = build(point_model(pts), "-3:3:7", "-3:3:7", "-1.5:1.5:3");
   const TableView t = testing::open_table(bytes);
   app::GrayImage image(180, 150);
-  for (auto& v : image.pixels) v = rng.bernoulli(0.15) ? 255 : 0;
-  const Detector binary{table_format::DetectorKind::kBinary, 0};
+  for (auto& v : image.pixels) v = rng.bernoulli(0.15) ? 255 : static_cast<std::uint8_t>(rng.uniform_int(0, 90));
   const ImageWindow big{-20, -30, 230, 210};  // the whole image and beyond
-  std::vector<RoiPoint> detected(feature_capacity(big.width, big.height));
-  FeatureCount found;
-  ASSERT_EQ(extract_features(image.view(), big, binary.kind, 0, detected, found), Status::kOk);
-  detected.resize(found.written);
-  Scratch a(t), b(t);
-  for (const Pose pose : {Pose{90, 75, 0, 0}, Pose{90.4f, 74.6f, 7.3f, 0}, Pose{60, 40, -33.0f, 0}, Pose{3, 140, 90.5f, 0},
-                          Pose{175.2f, 2.7f, 181.0f, 0}, Pose{120, 100, 0.01f, 0}}) {
-    SCOPED_TRACE(pose.theta_deg);
-    PreparedFrame expected, got;
-    ASSERT_EQ(prepare_frame(t, binary, image.view(), pose, a.view(), expected), Status::kOk);
-    ASSERT_EQ(map_features(t, image.view(), detected, big, pose, b.view(), got), Status::kOk);
-    EXPECT_EQ(got.roi_centre_x, expected.roi_centre_x);
-    EXPECT_EQ(got.roi_centre_y, expected.roi_centre_y);
-    ASSERT_EQ(got.features, expected.features);
-    EXPECT_GT(got.features, 0u);
-    for (std::uint32_t i = 0; i < got.features; ++i) {
-      ASSERT_EQ(b.features[i].col, a.features[i].col) << i;
-      ASSERT_EQ(b.features[i].row, a.features[i].row) << i;
+  std::vector<std::uint16_t> magnitudes(tracker_magnitude_entries(t));
+  for (const Detector detector : {Detector{table_format::DetectorKind::kBinary, 0}, Detector{table_format::DetectorKind::kCanny, 400}}) {
+    std::vector<RoiPoint> detected(feature_capacity(big.width, big.height));
+    FeatureCount found;
+    ASSERT_EQ(extract_features(image.view(), big, detector.kind, detector.threshold, detected, found), Status::kOk);
+    detected.resize(found.written);
+    for (const bool rows : {false, true}) {
+      Scratch a(t), b(t);
+      TrackerScratch prepared = a.view();
+      if (rows) prepared.magnitudes = magnitudes;
+      for (const Pose pose : {Pose{90, 75, 0, 0}, Pose{90.4f, 74.6f, 7.3f, 0}, Pose{60, 40, -33.0f, 0}, Pose{3, 140, 90.5f, 0},
+                              Pose{175.2f, 2.7f, 181.0f, 0}, Pose{120, 100, 0.01f, 0}, Pose{88, 70, 45.0f, 0}}) {
+        SCOPED_TRACE(pose.theta_deg);
+        PreparedFrame expected, got;
+        ASSERT_EQ(prepare_frame(t, detector, image.view(), pose, prepared, expected), Status::kOk);
+        ASSERT_EQ(map_features(t, image.view(), detected, big, pose, b.view(), got), Status::kOk);
+        EXPECT_EQ(got.roi_centre_x, expected.roi_centre_x);
+        EXPECT_EQ(got.roi_centre_y, expected.roi_centre_y);
+        ASSERT_EQ(got.features, expected.features);
+        EXPECT_GT(got.features, 0u);
+        for (std::uint32_t i = 0; i < got.features; ++i) {
+          ASSERT_EQ(b.features[i].col, a.features[i].col) << i;
+          ASSERT_EQ(b.features[i].row, a.features[i].row) << i;
+        }
+      }
     }
   }
 }

@@ -6,12 +6,9 @@
 #include <unistd.h>
 
 #include <algorithm>
-#include <cstring>
 #include <filesystem>
 
 #include "gabarit/app/evaluation.hpp"
-#include "gabarit/app/scratch.hpp"
-#include "gabarit/finder_search.hpp"
 #include "gabarit/host/scenes/scene_synth.hpp"
 #include "gabarit/host/scenes/synth.hpp"
 #include "gabarit/host/tables/model.hpp"
@@ -189,52 +186,6 @@ TEST(Tracking, TheFrameLedgerSplitsEachFrameByPhase) {
   });
   EXPECT_EQ(rows, 30u);
   EXPECT_GT(survey_work, 0u);  // the survey for look-alikes, spread over the first frames
-}
-
-
-// Detection's fine level detects the frame's Canny features once and maps
-// each vote's ROI from them (model_finder.hpp, frame_features): the
-// detections are bit for bit those of votes that detect their own, in one
-// call and spread over calls on a held frame.
-TEST(Tracking, DetectionOnTheFramesFeaturesIsDetectionOnEachVotesOwn) {
-  host::SceneOptions so = walking_astronaut(host::SceneBackground::kGravel, 2, 7);
-  const GrayScene scene(so, "gabarit_frame_features");
-  const TableView table = testing::open_table(scene.bytes);
-  auto frames_in = app::open_frames((scene.dir / "frames.y4m").string());
-  app::GrayImage frame;
-  ASSERT_TRUE(frames_in->next(frame));
-  const Detector detector = detector_of(table);
-  ASSERT_EQ(detector.kind, table_format::DetectorKind::kCanny);
-  ModelFinder finder(table, detector);
-  FinderOptions options;
-  app::FinderBuffers buffers(table, detector, options, frame.width, frame.height);
-  app::TrackerBuffers fine(table, app::VoterChoice::kAuto);
-  const auto run = [&](bool frame_features, std::uint64_t budget, std::vector<Detection>& out, std::uint64_t& work) {
-    FinderScratch scratch = buffers.scratch(fine.scratch());
-    if (!frame_features) scratch.frame_features = {};
-    FinderSearch search(finder);
-    ASSERT_EQ(search.begin(frame.width, frame.height, options, scratch), Status::kOk);
-    while (search.active()) ASSERT_EQ(search.advance(frame.view(), scratch, budget), Status::kOk);
-    out.assign(options.max_count, Detection{});
-    std::uint32_t count = 0;
-    ASSERT_EQ(search.results(scratch, out, count), Status::kOk);
-    out.resize(count);
-    work = search.total_work();
-  };
-  for (const std::uint64_t budget : {kUnlimitedWork, std::uint64_t{30000}}) {
-    std::vector<Detection> own, mapped;
-    std::uint64_t own_work = 0, mapped_work = 0;
-    run(false, budget, own, own_work);
-    run(true, budget, mapped, mapped_work);
-    ASSERT_GE(own.size(), 1u);
-    ASSERT_EQ(mapped.size(), own.size()) << budget;
-    EXPECT_EQ(std::memcmp(mapped.data(), own.data(), own.size() * sizeof(Detection)), 0) << budget;
-    // The frame's features were used (its extraction is counted instead of
-    // the votes': here about as many pixels, 110592 against about 101000).
-    EXPECT_NE(mapped_work, own_work) << budget;
-    EXPECT_NEAR(own[0].pose.x, scene.truth[0].x, 2.0);
-    EXPECT_NEAR(own[0].pose.y, scene.truth[0].y, 2.0);
-  }
 }
 
 }  // namespace

@@ -42,6 +42,7 @@ constexpr std::size_t feature_capacity(std::uint16_t window_width, std::uint16_t
 struct FeatureCount {
   std::uint32_t written = 0;
   std::uint32_t dropped = 0;  // features found beyond out.size()
+  std::uint64_t scanned = 0;  // pixels the detector examined (the cost of extraction)
 };
 
 // Largest gradient magnitude the Sobel L1 norm can produce on 8-bit images.
@@ -78,8 +79,7 @@ constexpr std::uint8_t orientation_channel(std::uint8_t orientation) noexcept {
   return static_cast<std::uint8_t>(orientation >> 4);
 }
 
-Status extract_binary(const ImageView& image, const ImageWindow& window, std::span<RoiPoint> out,
-                      FeatureCount& count) noexcept;
+
 
 Status extract_gradient_rows(const ImageView& image, const ImageWindow& window, std::uint16_t threshold,
                              std::span<RoiPoint> out, FeatureCount& count) noexcept;
@@ -92,12 +92,30 @@ Status extract_gradient_rows(const ImageView& image, const ImageWindow& window, 
 constexpr std::size_t canny_scratch_entries(std::uint16_t window_width) noexcept {
   return 3 * (std::size_t{window_width} + 2);
 }
+// The part of a window a caller keeps: the image pixels p whose offset
+// p - centre, turned by -theta, lies in [u_min, u_max] x [v_min, v_max]
+// (u = cos dx + sin dy, v = -sin dx + cos dy). A tracker at an angle scans
+// the square that holds its rotated ROI and keeps only the ROI's pixels.
+struct TurnedRectangle {
+  float centre_x = 0.0f, centre_y = 0.0f;
+  float cos = 1.0f, sin = 0.0f;
+  float u_min = 0.0f, u_max = 0.0f, v_min = 0.0f, v_max = 0.0f;
+};
+// Given `keep`, the binary and Canny detectors scan of each window row only
+// the columns the rectangle covers, two pixels wider on each side (so that
+// no rounding leaves out a pixel it covers): the features written are those
+// of the whole window that lie there, in the same order (a subset that holds
+// every feature within the rectangle). Gradient rows, whose runs are cut at
+// the window's edges, ignore it.
+Status extract_binary(const ImageView& image, const ImageWindow& window, std::span<RoiPoint> out, FeatureCount& count,
+                      const TurnedRectangle* keep = nullptr) noexcept;
 Status extract_canny(const ImageView& image, const ImageWindow& window, std::uint16_t threshold, std::span<RoiPoint> out,
-                     FeatureCount& count, std::span<std::uint16_t> magnitude_rows = {}) noexcept;
+                     FeatureCount& count, std::span<std::uint16_t> magnitude_rows = {},
+                     const TurnedRectangle* keep = nullptr) noexcept;
 
-// Dispatches on the detector recorded in a table; magnitude_rows as extract_canny's.
+// Dispatches on the detector recorded in a table; magnitude_rows and keep as extract_canny's.
 Status extract_features(const ImageView& image, const ImageWindow& window, table_format::DetectorKind kind,
                         std::uint16_t threshold, std::span<RoiPoint> out, FeatureCount& count,
-                        std::span<std::uint16_t> magnitude_rows = {}) noexcept;
+                        std::span<std::uint16_t> magnitude_rows = {}, const TurnedRectangle* keep = nullptr) noexcept;
 
 }  // namespace gabarit

@@ -80,7 +80,7 @@ class FinderSearch {
 
  private:
   enum class Phase : std::uint8_t { kIdle, kCoarseRows, kCoarseFeatures, kFeatureChannels, kFeatureIndex, kRotationLists,
-                                    kRotationVote, kRotationScan, kFrameFeatures, kFirstVotes, kConverge, kDone };
+                                    kRotationVote, kRotationScan, kFirstVotes, kConverge, kDone };
   // One piece of the current phase, spending at most about `allowance`
   // (at least one item); adds its work to `spent`.
   Status piece(const ImageView& image, FinderScratch& scratch, std::uint64_t allowance, std::uint64_t& spent) noexcept;
@@ -94,7 +94,6 @@ class FinderSearch {
   Status first_vote(const ImageView& image, FinderScratch& scratch, std::uint64_t& spent) noexcept;
   Status converge_vote(const ImageView& image, FinderScratch& scratch, std::uint64_t& spent) noexcept;
   Status finish_candidate(const ImageView& image, FinderScratch& scratch, std::uint64_t& spent) noexcept;
-  std::uint64_t frame_features(const ImageView& image, FinderScratch& scratch, std::uint64_t allowance) noexcept;
   Status fine_vote(const ImageView& image, const Pose& from, FinderScratch& scratch, StepResult& step,
                    std::uint64_t& spent) noexcept;
   void offer_peak(FinderScratch& scratch, std::int32_t x, std::int32_t y, std::uint32_t votes) noexcept;
@@ -127,13 +126,6 @@ class FinderSearch {
   std::uint64_t last_work_ = 0, total_work_ = 0;
   std::uint32_t frames_ = 0;
   bool holding_ = false;  // the first frame is in scratch.held_frame
-  bool unlimited_ = false;  // this advance() runs the search to its end
-  // The fine level's features, detected once in scratch.frame_features, a
-  // few rows a piece (of the frame of advance() call number
-  // frame_features_call_, or the held one).
-  bool frame_features_ = false;
-  std::uint32_t frame_feature_count_ = 0;
-  std::uint32_t frame_features_call_ = 0;
 };
 
 }  // namespace gabarit

@@ -105,8 +105,6 @@ struct FinderScratchSizes {
   std::size_t coarse_pixels = 0;      // coarse_image, coarse_features, feature_index
   std::size_t accumulator = 0;        // (coarse_width + 2 pad) x (coarse_height + 2 pad)
   std::size_t model_points = 0;       // the largest depth's model points: model, rotated (x2 for the lists)
-  std::size_t frame_pixels = 0;       // optional frame_features: width x height
-  std::size_t frame_magnitudes = 0;   // optional frame_magnitudes: the detector's rows over the frame's width
 };
 FinderScratchSizes finder_scratch_sizes(const FinderGeometry& geometry, const TableView& table) noexcept;
 
@@ -138,13 +136,6 @@ struct FinderScratch {
   // Optional, width x height: a search spread over frames keeps its first
   // frame here and works on it throughout (finder_search.hpp); find ignores it.
   std::span<std::uint8_t> held_frame;
-  // Optional, frame_pixels and frame_magnitudes entries: the fine level
-  // detects the frame's features once and each of its votes takes those of
-  // its ROI (tracker.hpp, map_features) instead of detecting them again, when
-  // the candidates' ROIs would cost more. Only for detectors whose features
-  // do not depend on the window (binary, Canny); same detections either way.
-  std::span<RoiPoint> frame_features = {};
-  std::span<std::uint16_t> frame_magnitudes = {};
 };
 
 class ModelFinder {

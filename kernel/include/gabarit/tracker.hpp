@@ -126,8 +126,9 @@ struct PreparedFrame {
   std::int32_t roi_centre_y = 0;
   std::uint32_t features = 0;          // valid entries at the start of scratch.features
   std::uint32_t features_dropped = 0;
-  // The detector's window inside the image: the ROI, or at an angle the
-  // square that holds it rotated (the cost of extraction, frame_ledger.hpp).
+  // The pixels the detector examined (the cost of extraction,
+  // frame_ledger.hpp): the ROI's, or at an angle (Canny) the rotated ROI's
+  // columns of each row of the square that holds it.
   std::uint32_t pixels_scanned = 0;
 };
 Status prepare_frame(const TableView& table, const Detector& detector, const ImageView& image, const Pose& previous,

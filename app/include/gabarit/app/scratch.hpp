@@ -78,8 +78,6 @@ class FinderBuffers {
   std::vector<std::int32_t> rotated_;
   std::vector<FinderCandidate> candidates_;
   std::vector<std::uint8_t> held_frame_;  // a search spread over frames holds its first frame
-  std::vector<RoiPoint> frame_features_;  // the fine level's features, detected once per search
-  std::vector<std::uint16_t> frame_magnitudes_;
 };
 
 // The focus stack a table carries (format 1.1: the model images it was built
