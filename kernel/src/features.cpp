@@ -43,8 +43,11 @@ void kept_columns(const TurnedRectangle* keep, std::int64_t y, std::int64_t lo, 
   if (keep == nullptr) return;
   const float dy = static_cast<float>(y) - keep->centre_y;
   float from = -1.0e9f, to = 1.0e9f;
-  // a dx + b within [low, high]: an interval of dx (|a| tiny: b decides, a
-  // pixel of slack for the |a dx| < 0.25 left out).
+  // a dx + b within [low, high]: an interval of dx. Where |a| is tiny, b
+  // decides, with the largest |a dx| over the row (and a pixel) as slack.
+  const float reach = static_cast<float>(hi - lo) + (keep->centre_x > static_cast<float>(lo) ? keep->centre_x - static_cast<float>(lo)
+                                                                                             : static_cast<float>(lo) - keep->centre_x);
+  const float slack = 1.0f + 1.0e-4f * reach;
   const auto bound = [&](float a, float b, float low, float high) {
     if (a > 1.0e-4f || a < -1.0e-4f) {
       float p = (low - b) / a, q = (high - b) / a;
@@ -54,7 +57,7 @@ void kept_columns(const TurnedRectangle* keep, std::int64_t y, std::int64_t lo, 
       }
       from = p > from ? p : from;
       to = q < to ? q : to;
-    } else if (b < low - 1.0f || b > high + 1.0f) {
+    } else if (b < low - slack || b > high + slack) {
       from = 1.0f, to = 0.0f;
     }
   };
@@ -70,7 +73,6 @@ void kept_columns(const TurnedRectangle* keep, std::int64_t y, std::int64_t lo, 
   xe = e < hi ? e : hi;
   if (xe < xb) xe = xb;
 }
-
 
 // The 3x3 Sobel operator at an interior pixel (1 <= x < width - 1, likewise
 // y): the one body every detector and every orientation uses.

@@ -79,8 +79,6 @@ constexpr std::uint8_t orientation_channel(std::uint8_t orientation) noexcept {
   return static_cast<std::uint8_t>(orientation >> 4);
 }
 
-
-
 Status extract_gradient_rows(const ImageView& image, const ImageWindow& window, std::uint16_t threshold,
                              std::span<RoiPoint> out, FeatureCount& count) noexcept;
 

@@ -127,7 +127,7 @@ struct PreparedFrame {
   std::uint32_t features = 0;          // valid entries at the start of scratch.features
   std::uint32_t features_dropped = 0;
   // The pixels the detector examined (the cost of extraction,
-  // frame_ledger.hpp): the ROI's, or at an angle (Canny) the rotated ROI's
+  // frame_ledger.hpp): the ROI's, or at an angle (binary, Canny) the rotated ROI's
   // columns of each row of the square that holds it.
   std::uint32_t pixels_scanned = 0;
 };
