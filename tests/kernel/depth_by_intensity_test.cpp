@@ -92,6 +92,63 @@ TEST(DepthByIntensity, ASwitchMarginKeepsTheCurrentDepth) {
   EXPECT_EQ(depth_by_intensity(f.view(), Pose{60.0f, 48.0f, 0.0f, 1}, fs, depth, -0.5f), Status::kInvalidArgument);
 }
 
+// A texture at any real model position, fine (a period of about 3 px) over
+// coarse (about 10 px), so that a blur changes its shape, not only its
+// contrast: sampled at whole model pixels it is the sharp stack image; the
+// frame samples it at fractional positions, as a sharp object placed
+// between pixels is seen.
+float fine_texture(float u, float v) {
+  constexpr float kTwoPi = 6.2831853f;
+  return 128.0f + 50.0f * std::sin(kTwoPi * u / 3.1f) * std::cos(kTwoPi * v / 3.7f) + 35.0f * std::sin(kTwoPi * u / 11.0f) +
+         30.0f * std::cos(kTwoPi * v / 9.0f);
+}
+
+// The frame's bilinear samples at half a pixel blur it by a quarter of a
+// pixel squared along each axis. A second stack image, the sharp one blurred
+// by as much ([1 6 1] / 8 along each axis), then correlates better with the
+// sharp object than the sharp image itself (correlation_at, below); the
+// depth must still be the sharp one's: the model is blurred as the frame's
+// samples are before the depths are compared.
+TEST(DepthByIntensity, TheFramesInterpolationDoesNotFavourABlurrierImage) {
+  GrayImage sharp(41, 41), blurred(41, 41);
+  for (std::uint32_t v = 0; v < 41; ++v)
+    for (std::uint32_t u = 0; u < 41; ++u)
+      sharp.at(u, v) = static_cast<std::uint8_t>(round_to_int(fine_texture(static_cast<float>(u), static_cast<float>(v))));
+  const auto at = [&](std::int32_t u, std::int32_t v) {
+    const auto clamp = [](std::int32_t i) { return static_cast<std::uint32_t>(i < 0 ? 0 : (i > 40 ? 40 : i)); };
+    return static_cast<float>(sharp.at(clamp(u), clamp(v)));
+  };
+  for (std::int32_t v = 0; v < 41; ++v)
+    for (std::int32_t u = 0; u < 41; ++u) {
+      float sum = 0.0f;
+      for (std::int32_t j = -1; j <= 1; ++j)
+        for (std::int32_t i = -1; i <= 1; ++i) sum += (i == 0 ? 6.0f : 1.0f) * (j == 0 ? 6.0f : 1.0f) * at(u + i, v + j);
+      blurred.at(static_cast<std::uint32_t>(u), static_cast<std::uint32_t>(v)) = static_cast<std::uint8_t>(round_to_int(sum / 64.0f));
+    }
+  const std::vector<GrayImage> images{sharp, blurred};
+  const Views views(images);
+  const FocusStack fs{views.views, 20.0f, 20.0f, 1};
+  for (const float theta : {0.0f, 17.0f}) {
+    const Pose pose{60.5f, 48.5f, theta, 0};
+    const SinCos r = sin_cos_deg(theta);
+    GrayImage f(120, 100, 128);
+    for (std::uint32_t y = 0; y < f.height; ++y)
+      for (std::uint32_t x = 0; x < f.width; ++x) {
+        const float dx = static_cast<float>(x) - pose.x, dy = static_cast<float>(y) - pose.y;
+        const float u = 20.0f + r.cos * dx + r.sin * dy, v = 20.0f - r.sin * dx + r.cos * dy;
+        if (u >= -1.0f && v >= -1.0f && u <= 41.0f && v <= 41.0f)
+          f.at(x, y) = static_cast<std::uint8_t>(round_to_int(fine_texture(u, v)));
+      }
+    float sharp_score = 0.0f, blurred_score = 0.0f;
+    ASSERT_TRUE(correlation_at(f.view(), pose, fs, 0, sharp_score));
+    ASSERT_TRUE(correlation_at(f.view(), pose, fs, 1, blurred_score));
+    EXPECT_GT(blurred_score, sharp_score) << "theta " << theta << ": the bias this guards against is gone from the frame";
+    std::uint16_t depth = 1;
+    ASSERT_EQ(depth_by_intensity(f.view(), pose, fs, depth), Status::kOk);
+    EXPECT_EQ(depth, 0) << "theta " << theta;
+  }
+}
+
 TEST(DepthByIntensity, OutsideTheFrameLeavesTheDepthAlone) {
   const auto stack = make_stack();
   const Views v(stack);
