@@ -32,6 +32,7 @@ Status TrackingSession::start(const SessionOptions& options, const Pose& initial
       !(options.verify_lost >= 0.0f && options.verify_lost <= 1.0f) ||
       !(options.ambiguity_margin >= 0.0f && options.ambiguity_margin <= 1.0f) ||
       !(options.verification.spacing_px > 0.0f && options.verification.spacing_px <= 4.0f) ||
+      !(options.verification.max_angle_spacings > 0.0f && options.verification.max_angle_spacings <= 180.0f) ||
       !(options.verification.distinct_px >= 0.0f) ||
       !(options.survey_frames >= 0.0f && options.survey_frames <= 1000.0f) ||
       !(options.recovery_frames >= 0.0f && options.recovery_frames <= 1000.0f)) {

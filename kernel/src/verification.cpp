@@ -211,7 +211,8 @@ Status verify(const ImageView& frame, const FocusStack& stack, const Proposals& 
   out = Verdict{};
   if (!frame.valid() || !valid_focus_stack(stack) || proposals.count > kMaxProposals ||
       !(options.spacing_px > 0.0f && options.spacing_px <= 4.0f) || !(options.distinct_px >= 0.0f) ||
-      !(options.tie_margin >= 0.0f && options.tie_margin <= 2.0f) || !(options.max_offset_px > 0.0f)) {
+      !(options.tie_margin >= 0.0f && options.tie_margin <= 2.0f) || !(options.max_offset_px > 0.0f) ||
+      !(options.max_angle_spacings > 0.0f && options.max_angle_spacings <= 180.0f)) {
     return Status::kInvalidArgument;
   }
   for (std::uint32_t i = 0; i < proposals.count; ++i) {
@@ -256,9 +257,7 @@ Status verify(const ImageView& frame, const FocusStack& stack, const Proposals& 
     float fine_score = 0.0f;
     if (options.refine_by == RefineBy::kGaussNewton) {
       fine_score = score;  // replaced by the first pass's, at the fine step
-      // The angle as far from the winner's as the quadratic design's three
-      // rounds reach (1 + 1/2 + 1/4 spacings).
-      ascend(frame, fine, options.refine_angle, reach, won, options.max_offset_px, 1.75f * spacing_deg, pose, fine_score,
+      ascend(frame, fine, options.refine_angle, reach, won, options.max_offset_px, options.max_angle_spacings * spacing_deg, pose, fine_score,
              out.correlations);
     } else {
       ++out.correlations;

@@ -119,6 +119,28 @@ TEST(Verification, TheQuadraticDesignRefinesToATenthAtMoreCorrelations) {
   EXPECT_LT(3u * newton.correlations, quadratic.correlations);
 }
 
+// Every proposal at a wrong predicted angle (the votes of a near-circular
+// object barely tell angles apart): Gauss-Newton pulls the angle back by up
+// to max_angle_spacings angle spacings (here 0.94 degrees), and no farther.
+TEST(Verification, TheAngleIsPulledBackWithinItsBound) {
+  const Stack s(1);
+  const Pose truth{90.37f, 70.81f, 3.3f, 0};
+  const GrayImage frame = frame_at(truth, 0);
+  constexpr float kSpacingDeg = 0.5f / (0.5f * kSide) * 57.2957795f;
+  Proposals p;
+  p.add({90.0f, 71.0f, truth.theta_deg - 2.5f * kSpacingDeg, 0});
+  Verdict wide, narrow;
+  ASSERT_EQ(verify(frame.view(), s.stack, p, VerifyOptions{}, wide), Status::kOk);
+  EXPECT_NEAR(wide.pose.theta_deg, truth.theta_deg, 0.1f);
+  EXPECT_NEAR(wide.pose.x, truth.x, 0.1f);
+  VerifyOptions o;
+  o.max_angle_spacings = 1.75f;
+  ASSERT_EQ(verify(frame.view(), s.stack, p, o, narrow), Status::kOk);
+  EXPECT_NEAR(narrow.pose.theta_deg, p.poses[0].theta_deg + 1.75f * kSpacingDeg, 1.0e-3f);
+  o.max_angle_spacings = 0.0f;
+  EXPECT_EQ(verify(frame.view(), s.stack, p, o, narrow), Status::kInvalidArgument);
+}
+
 // One Gauss-Newton pass: the correlation it reports is correlation_at's,
 // bit for bit, and its step goes most of the way to the true pose, under a
 // change of gain and offset too (the correlation ignores both).

@@ -69,9 +69,17 @@ struct VerifyOptions {
   bool refine_angle = true;
   // The quadratic design's first spacing: this many pixels along x and y,
   // and the angle that moves the model's outline (half its larger side from
-  // the reference point) by as much, within [0.1, 1] degree. Either
-  // refinement keeps the angle within 1.75 such angles of the winner's.
+  // the reference point) by as much, within [0.1, 1] degree. The quadratic
+  // design's three rounds keep the angle within 1.75 such angles of the
+  // winner's.
   float spacing_px = 0.5f;
+  // Gauss-Newton keeps the angle within this many of those angles of the
+  // winner's (0 .. 180]. Where the votes barely tell angles apart (a
+  // near-circular coin), every proposal is near the predicted angle; 1.75
+  // (the quadratic design's reach) let a wrong prediction stand, and the
+  // angle ran away from the truth frame after frame. 3.5 lets the intensities pull it back
+  // (docs/tracking.md, "Vote, then verify").
+  float max_angle_spacings = 3.5f;
   // The refinement samples the model at every stack.step-th pixel, or finer
   // until it has at least this many samples (a small model).
   std::uint32_t refine_samples = 4096;
