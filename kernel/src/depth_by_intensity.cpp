@@ -163,36 +163,45 @@ void walk_samples(const ImageView& frame, std::uint32_t width, std::uint32_t hei
 }
 
 // A model pixel blurred as much as the frame's sample is by the bilinear
-// interpolation, in 1/256 (0 .. 255 * 256). Interpolating at a fraction f of
-// a pixel averages the frame with a kernel of variance f (1 - f) along each
-// axis (up to a quarter of a pixel squared at half a pixel); the model's
-// pixels are not interpolated, so a sharper stack image correlated worse
-// than a blurrier one at most poses, and comparing depths favoured the
-// blurrier (docs/tracking.md, "Depth"). The model gets the same variance,
-// the mean of the two axes' (its axes are turned against the frame's), from
-// a symmetric three-tap kernel along each of its axes (e, 1 - 2e, e: variance
-// 2e), which moves no edge. At the image's border the edge pixel repeats.
-std::uint32_t matched_model_value(const ImageView& m, std::uint32_t u, std::uint32_t v, const FrameSample& at) noexcept {
-  // The axes' variances in 1/65536 of a pixel squared; e, half their mean,
-  // in 1/512: 0 .. 64 (a quarter of a pixel squared at half a pixel).
-  const std::uint32_t e = (at.wx * (256u - at.wx) + at.wy * (256u - at.wy)) >> 9;
-  const std::uint32_t centre = 512u - 2u * e;
-  const std::uint32_t left = u > 0 ? u - 1 : u, right = u + 1 < m.width ? u + 1 : u;
-  const auto along_row = [&](std::uint32_t row) {
-    const std::uint8_t* r = m.pixels + std::size_t{row} * m.stride;
-    return centre * r[u] + e * (std::uint32_t{r[left]} + r[right]);  // 1/512
-  };
-  const std::uint32_t above = v > 0 ? v - 1 : v, below = v + 1 < m.height ? v + 1 : v;
-  const std::uint32_t blurred = centre * along_row(v) + e * (along_row(above) + along_row(below));  // 1/2^18
-  return (blurred + 512u) >> 10;
-}
+// interpolation. Interpolating at a fraction f of a pixel averages the frame
+// with a kernel of variance f (1 - f) along each axis (up to a quarter of a
+// pixel squared at half a pixel); the model's pixels are not interpolated,
+// so a sharper stack image correlated worse than a blurrier one at most
+// poses, and comparing depths favoured the blurrier (docs/tracking.md, "Vote,
+// then verify", item 6). The model gets the same variance, the mean of the
+// two axes' (its axes are turned against the frame's), from a symmetric
+// five-point kernel (k on each of the four neighbours, 1 - 4k at the
+// centre: variance 2k along each axis), which moves no edge. At the image's
+// border the edge pixel repeats.
+struct MatchedBlur {
+  std::uint32_t k = 0, centre = 256;           // in 1/256
+  std::uint32_t left = 0, right = 0;           // the neighbours' columns
+  std::ptrdiff_t up = 0, down = 0;             // and offsets to their rows
+  MatchedBlur() noexcept = default;
+  MatchedBlur(const ImageView& m, std::uint32_t u, std::uint32_t v, const FrameSample& at) noexcept {
+    // The axes' variances in 1/65536 of a pixel squared; k, half their
+    // mean, in 1/256: 0 .. 32 (a quarter of a pixel squared at half a pixel).
+    k = (at.wx * (256u - at.wx) + at.wy * (256u - at.wy)) >> 10;
+    centre = 256u - 4u * k;
+    left = u > 0 ? u - 1 : u;
+    right = u + 1 < m.width ? u + 1 : u;
+    up = v > 0 ? -static_cast<std::ptrdiff_t>(m.stride) : 0;
+    down = v + 1 < m.height ? static_cast<std::ptrdiff_t>(m.stride) : 0;
+  }
+  // Row `row` of an image of the model's size, at column u: in 1/256 (0 .. 255 * 256).
+  std::uint32_t value(const std::uint8_t* row, std::uint32_t u) const noexcept {
+    const std::uint32_t around = std::uint32_t{row[left]} + row[right] + row[static_cast<std::ptrdiff_t>(u) + up] +
+                                 row[static_cast<std::ptrdiff_t>(u) + down];
+    return centre * row[u] + k * around;
+  }
+};
 
 // The correlation of each of `images` (at most kGroup, all of the stack's
 // size) with the frame at a pose, as the sign of the correlation times its
 // square (ordered like the correlation, no square root); ok[i] is false when
 // too few samples fall in the frame or either side is flat. With
-// matched_blur, each model value is matched_model_value's (for comparing
-// stack images with each other).
+// matched_blur, each model value is blurred as MatchedBlur says (for
+// comparing stack images with each other).
 void correlations(const ImageView& frame, std::span<const ImageView> images, const Pose& pose, const FocusStack& stack,
                   float* scores, bool* ok, bool matched_blur = false) noexcept {
   FrameSums f;
@@ -210,8 +219,9 @@ void correlations(const ImageView& frame, std::span<const ImageView> images, con
         ++f.n;
         f.b += b;
         f.bb += b * b;
+        const MatchedBlur blur = matched_blur ? MatchedBlur(images[0], u, row_v, at) : MatchedBlur{};
         for (std::size_t i = 0; i < images.size(); ++i) {
-          const std::uint64_t a = matched_blur ? matched_model_value(images[i], u, row_v, at) : model_rows[i][u];
+          const std::uint64_t a = matched_blur ? blur.value(model_rows[i], u) : model_rows[i][u];
           s[i].a += a;
           s[i].aa += a * a;
           s[i].ab += a * b;
