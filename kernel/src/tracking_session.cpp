@@ -417,7 +417,12 @@ Status TrackingSession::recover(const ImageView& image, SessionScratch scratch, 
                          filter_.classify(out.score, normalised_score(out.step.runner_up)) == Confidence::kHigh &&
                          !clutter_rejects(out.score, out.step);
   out.confidence = confident ? Confidence::kHigh : Confidence::kNone;
-  if (!confident) return Status::kOk;
+  // Verifying, a search whose vote is too weak to trust (a dimmed frame's
+  // edges fall below the detector's thresholds) is still taken where the
+  // pose it found correlates as a tracked frame must (below), as a tracked
+  // frame's verified-only measurement is.
+  const bool verified_only = !confident && out.step.best.votes > 0 && verifying() && verified_reference_ > 0.0f;
+  if (!confident && !verified_only) return Status::kOk;
   SubCellOffset o;
   if (options_.refine) o = refine_within_cell(fine_, scratch.fine.counters, out.step.best.cell);
   Pose found_pose = pose_of_cell(fine_, out.step.best.cell, found.from, out.step.roi_centre_x, out.step.roi_centre_y, o.x, o.y,
@@ -434,6 +439,7 @@ Status TrackingSession::recover(const ImageView& image, SessionScratch scratch, 
       return Status::kOk;
     }
   }
+  if (!confident) out.confidence = Confidence::kIntermediate;
   pose_ = found_pose;
   filter_.restart(pose_);
   lost_ = false;

@@ -5,8 +5,10 @@
 //   - sub-cell refinement (refinement.hpp) of the chosen cell;
 //   - recovery (recovery_search.hpp): once lost, a search around the last
 //     confident pose, whose best candidate returns the session to tracking
-//     only at high confidence; or, given a particle recovery stage
-//     (particle_recovery.hpp), a particle filter over the whole frame;
+//     only at high confidence (verifying, and correlating as a tracked frame
+//     must; a vote too weak to trust is taken on that correlation alone);
+//     or a detection (detection_recovery.hpp) or particle recovery stage
+//     (particle_recovery.hpp) over the whole frame;
 //   - depth and angle by intensity (depth_by_intensity.hpp), with a focus stack.
 // With everything off (kPlainSession) a session is exactly track_step frame
 // after frame, a lost frame keeping the previous pose.
