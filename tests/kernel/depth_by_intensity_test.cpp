@@ -149,6 +149,64 @@ TEST(DepthByIntensity, TheFramesInterpolationDoesNotFavourABlurrierImage) {
   }
 }
 
+// Stack images of an object on a flat grey are compared over the object's
+// own samples (tests/tools/tracking_test.cpp shows why); where those are too
+// few to correlate (a 5 x 5 object, 3 x 3 inside its rim, sampled every
+// pixel: 9 samples), every sample is compared, as for any other stack.
+TEST(DepthByIntensity, AnObjectTooSmallForItsOwnSamplesIsComparedOverEverySample) {
+  std::vector<GrayImage> stack;
+  for (int d = 0; d < 3; ++d) {
+    GrayImage m(41, 41, 128);
+    for (std::uint32_t y = 18; y < 23; ++y)
+      for (std::uint32_t x = 18; x < 23; ++x) m.at(x, y) = static_cast<std::uint8_t>(((x + 2 * y + d) % 3) * 60 + 20);
+    stack.push_back(m);
+  }
+  const Views v(stack);
+  const FocusStack fs{v.views, 20.0f, 20.0f, 1};
+  for (std::uint16_t d = 0; d < 3; ++d) {
+    const GrayImage f = frame_with(stack[d], 60.0f, 48.0f, 0.0f);
+    std::uint16_t depth = 7;  // no current depth: the best is taken
+    ASSERT_EQ(depth_by_intensity(f.view(), Pose{60.0f, 48.0f, 0.0f, 0}, fs, depth), Status::kOk);
+    EXPECT_EQ(depth, d);
+  }
+}
+
+// A textured disc drawn on a flat grey, pasted over clutter: scoring a pose,
+// the model's flat surround is not compared with the clutter behind it (the
+// disc and a one-pixel ring around it are), so the true pose correlates as
+// the disc does. The same model with a border that is not quite flat (a
+// camera's crop) is compared over every sample, and the clutter pulls its
+// score down (r^2 0.10 against 0.65): that is what the support changes.
+TEST(CorrelationAt, AModelOnAFlatSurroundIsComparedOverItsOutlineNotTheClutter) {
+  GrayImage disc(41, 41, 128);
+  for (std::uint32_t v = 0; v < 41; ++v)
+    for (std::uint32_t u = 0; u < 41; ++u) {
+      const float du = static_cast<float>(u) - 20.0f, dv = static_cast<float>(v) - 20.0f;
+      if (du * du + dv * dv <= 144.0f)
+        disc.at(u, v) = static_cast<std::uint8_t>(round_to_int(fine_texture(static_cast<float>(u), static_cast<float>(v))));
+    }
+  GrayImage cropped = disc;  // its border one grey level off in places
+  for (std::uint32_t u = 0; u < 41; u += 2) cropped.at(u, 0) = 129;
+  GrayImage f(120, 100);
+  std::uint32_t state = 12345u;
+  for (std::uint8_t& p : f.pixels) {
+    state = state * 1664525u + 1013904223u;
+    p = static_cast<std::uint8_t>(state >> 24);
+  }
+  for (std::uint32_t v = 0; v < 41; ++v)
+    for (std::uint32_t u = 0; u < 41; ++u)
+      if (disc.at(u, v) != 128) f.at(40 + u, 28 + v) = disc.at(u, v);
+  const Pose truth{60.0f, 48.0f, 0.0f, 0};
+  const std::vector<GrayImage> flat{disc}, not_flat{cropped};
+  const Views flat_views(flat), crop_views(not_flat);
+  float on_outline = 0.0f, everywhere = 0.0f;
+  ASSERT_TRUE(correlation_at(f.view(), truth, FocusStack{flat_views.views, 20.0f, 20.0f, 1}, 0, on_outline));
+  ASSERT_TRUE(correlation_at(f.view(), truth, FocusStack{crop_views.views, 20.0f, 20.0f, 1}, 0, everywhere));
+  // The ring of clutter just outside the disc still costs a third.
+  EXPECT_GT(on_outline, 0.6f);
+  EXPECT_LT(everywhere, 0.2f);
+}
+
 TEST(DepthByIntensity, OutsideTheFrameLeavesTheDepthAlone) {
   const auto stack = make_stack();
   const Views v(stack);

@@ -5,7 +5,10 @@
 // Intensities do: at the pose the votes found, each stack image is laid over
 // the frame (rotated by the pose's angle about the model's reference point)
 // and compared by normalised cross-correlation; the best-correlated image is
-// the depth. The frame is sampled bilinearly in 1/256-pixel fixed point and
+// the depth. Where the stack images show the object on a flat surround
+// (their border one grey value), only the object's own samples are compared:
+// the frame shows something else behind it (depth_by_intensity.cpp,
+// ObjectSupport). The frame is sampled bilinearly in 1/256-pixel fixed point and
 // the sums are integers (the final ratio is one float division), so every
 // target gets the same answer; every
 // `step`-th model pixel in each direction is sampled.
@@ -60,6 +63,10 @@ inline constexpr std::uint32_t kMaxStackStep = 256;
 // The normalised cross-correlation of stack image `depth` with the frame at
 // `pose` (its depth ignored), as sign(r) r^2 (ordered like r, no square
 // root), exact integer sums then float: the same bits on every target.
+// Where the image shows the object on a flat surround (its border one grey
+// value), over the object and a one-pixel ring of the surround only (the
+// outline's contrast kept, the clutter behind the surround left out); over
+// every sample if it has none or too few of those fall in the frame.
 // False when fewer than 16 samples fall inside the frame or either side is
 // flat. Preconditions: valid_focus_stack(stack), depth < the stack's size,
 // pose_in_range(pose) and |theta| < 1e5.

@@ -92,11 +92,13 @@ struct SessionOptions {
   // chosen one: the frame is reported ambiguous (TrackState::kAmbiguous)
   // instead of one being picked silently.
   float ambiguity_margin = 0.02f;
-  // Verifying, the depth's hysteresis in correlation: 0.01 was chosen on the
-  // scene suite's tuning half (0, 0.005, 0.01 and 0.02 measured): less lags
-  // a stack whose neighbouring depths differ little, more lets texture
-  // around the object flip it (docs/tracking.md).
-  float verified_depth_switch = 0.01f;
+  // Verifying, the depth's hysteresis in correlation. Compared over the
+  // object's own samples (depth_by_intensity.hpp), a 7-depth stack's
+  // neighbouring depths differ by about 0.005 at the true one, so 0.01 held
+  // a wrong depth for whole sweeps; 0.002 was chosen on the suite's tuning
+  // half and the extra tuning scenes (0, 0.002, 0.005 and 0.01 measured;
+  // docs/tracking.md).
+  float verified_depth_switch = 0.002f;
   // With a detection stage, verifying: the work the survey for look-alikes
   // may spend after a tracked frame, in tracked frames (the running mean of
   // their work, finder_search.hpp); it goes on over the next frames until it
