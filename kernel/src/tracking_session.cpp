@@ -355,6 +355,14 @@ Status TrackingSession::track_fine(const ImageView& image, SessionScratch scratc
     all.add(predicted);
     all.add(pose_);
     GABARIT_TRY(verify_choice(image, all, confidence, chosen));
+    // Not taken (the best correlates below verify_accept of the reference:
+    // a dim frame, a partial occlusion), the votes' choice still loses to a
+    // proposal that correlates better than it: that one is the pose, with
+    // the votes' confidence. Keeping the votes' choice, a horse over the moon
+    // in the trough of a light swing walked 10 px off onto the moon's edges
+    // and was lost (the test
+    // Tracking.InADimFrameTheVotesChoiceYieldsToABetterCorrelatedProposal).
+    if (verdict_.found && !verdict_taken_ && verdict_.winner != 0) chosen = verdict_.pose;
     // Where the votes chose the depth clearly, they keep it (edge features
     // tell depths apart better than intensities over a textured object).
     if (verdict_taken_ && confidence != Confidence::kNone && m.depth_margin >= options_.depth_votes_decisive)

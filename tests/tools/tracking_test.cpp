@@ -160,6 +160,38 @@ TEST(Tracking, AReacquisitionInADimFrameIsTakenByTheVerifiedScore) {
   EXPECT_LE(a.reacquired_after[0], 1);
 }
 
+// The horse over the moon, its light swinging +-50% every 60 frames: in the
+// first trough (frames 40 to 45) the verified pose correlates below the
+// share of the bright frames' score that a measurement needs, so it is not
+// taken; the votes' choice then was, though another proposal correlated
+// better, and the track walked 10 px off onto the moon's edges by frame 44.
+// The better-correlated proposal is the pose (tracking_session.cpp).
+TEST(Tracking, InADimFrameTheVotesChoiceYieldsToABetterCorrelatedProposal) {
+  host::SceneOptions so;
+  so.object = host::SceneObject::kHorse;
+  so.background = host::SceneBackground::kMoon;
+  so.motion = host::SceneMotion::kSmooth;
+  so.illumination = 0.5;
+  so.illumination_period = 60;
+  so.width = so.height = 0;  // the horse's own size, as gabarit synth --scene horse
+  so.frames = 46;
+  so.seed = 300;  // a tuning scene: gabarit synth --scene horse --background moon --light 0.5:60 --seed 300
+  const GrayScene scene(so, "gabarit_dim_proposal");
+  const TableView table = testing::open_table(scene.bytes);
+  host::TrackingOptions options;
+  options.profile = app::SessionProfile{};  // gabarit track's defaults
+  auto frames_in = app::open_frames((scene.dir / "frames.y4m").string());
+  std::vector<app::PoseSample> poses;
+  host::run_tracking(table, *frames_in, scene.start(), options, [&](const app::TrackRow& r) {
+    poses.push_back({r.frame, r.step.pose.x, r.step.pose.y, r.step.pose.theta_deg, 0, true});
+  });
+  ASSERT_EQ(poses.size(), 46u);
+  for (std::uint32_t f = 36; f < 46; ++f) {
+    const double dx = poses[f].x - scene.truth[f].x, dy = poses[f].y - scene.truth[f].y;
+    EXPECT_LE(dx * dx + dy * dy, 1.0) << "frame " << f;
+  }
+}
+
 // A tilted 7-depth stack of the cat over a printed page, sweeping through
 // its depths (one every 6 frames). The model images show the cat on a flat
 // grey; the frames show the page around it. Compared over every sample, the
