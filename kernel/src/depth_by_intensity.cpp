@@ -338,6 +338,33 @@ bool correlation_at(const ImageView& frame, const Pose& pose, const FocusStack& 
   return correlation(frame, stack.images[depth], pose, stack, signed_r2);
 }
 
+bool frame_variance_at(const ImageView& frame, const Pose& pose, const FocusStack& stack, std::uint16_t depth,
+                       float& variance) noexcept {
+  const std::span<const ImageView> image = stack.images.subspan(depth, 1);
+  const ObjectSupport outline(image, ObjectSupport::kOutline);
+  // The samples correlation_at compares: the outline's, or every one.
+  for (const bool on_outline : {true, false}) {
+    if (on_outline && !outline.flat()) continue;
+    FrameSums f;
+    std::uint32_t model_v = 0;
+    walk_samples(
+        frame, image[0].width, image[0].height, pose, stack, [&](std::uint32_t v) { model_v = v; },
+        [&](std::uint32_t u, const FrameSample& at) {
+          if (on_outline && !outline.contains(u, model_v)) return;
+          const std::uint64_t b = at.value();
+          ++f.n;
+          f.b += b;
+          f.bb += b * b;
+        });
+    if (f.n < 16) continue;
+    // n^2 times the variance in (1/256 grey level)^2, exact, then to grey levels^2.
+    const float n = static_cast<float>(f.n);
+    variance = difference(f.n, f.bb, f.b, f.b) / (n * n) * (1.0f / 65536.0f);
+    return true;
+  }
+  return false;
+}
+
 namespace {
 
 // The float sums over the samples: j is d/d(x, y, theta) of the model's

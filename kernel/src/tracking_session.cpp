@@ -41,6 +41,8 @@ Status TrackingSession::start(const SessionOptions& options, const Pose& initial
   if (coarse_ != nullptr && coarse_->depth_count() != fine_.depth_count()) return Status::kInvalidArgument;
   options_ = options;
   verified_reference_ = 0.0f;
+  verified_variance_ = 0.0f;
+  frame_reference_ = 0.0f;
   pose_ = initial;
   last_confident_ = {initial, {}, 0};
   filter_.reset(options.filter, initial);
@@ -222,13 +224,41 @@ Status TrackingSession::verify_choice(const ImageView& image, const Proposals& p
   ledger_.add(FramePhase::kVerify, 0, read_ticks(clock_) - began);  // its work is counted with the frame's correlations
   GABARIT_TRY(verified);
   if (!verdict_.found) return Status::kOk;
-  verdict_taken_ = !(verified_reference_ > 0.0f) || verdict_.score >= options_.verify_accept * verified_reference_;
+  frame_reference_ = verified_reference_;
+  if (verdict_.score < options_.verify_accept * frame_reference_) frame_reference_ = reference_at(image, verdict_.pose);
+  verdict_taken_ = !(frame_reference_ > 0.0f) || verdict_.score >= options_.verify_accept * frame_reference_;
   if (!verdict_taken_) return Status::kOk;
   chosen = verdict_.pose;
   if (confidence == Confidence::kHigh) {
     verified_reference_ = verified_reference_ > 0.0f ? 0.9f * verified_reference_ + 0.1f * verdict_.score : verdict_.score;
+    float variance = 0.0f;
+    if (frame_variance_at(image, verdict_.pose, *stack_, verdict_.pose.depth, variance) && variance > 0.0f)
+      verified_variance_ = verified_variance_ > 0.0f ? 0.9f * verified_variance_ + 0.1f * variance : variance;
   }
   return Status::kOk;
+}
+
+// The reference a frame's verified score is held to, as its contrast at
+// `pose` allows. The reference correlation r falls short of 1 by the noise
+// (and what else the model does not explain), n^2 = (1 - r^2) V of the
+// frame's variance V at confident poses; the object's own share is V - n^2.
+// A frame dimmed to variance V' keeps the noise and loses object: it can
+// correlate only sqrt(1 - n^2 / V'). So a dim frame's pose is held to that
+// (never below half the reference), a brighter frame's to the reference as
+// it is. Without it, the trough of a light swing took no measurement and
+// declared a tracked target lost (docs/tracking.md, "Vote, then verify").
+float TrackingSession::reference_at(const ImageView& image, const Pose& pose) const noexcept {
+  float variance = 0.0f;
+  if (!(verified_reference_ > 0.0f && verified_variance_ > 0.0f) ||
+      !frame_variance_at(image, pose, *stack_, pose.depth, variance) || !(variance < verified_variance_)) {
+    return verified_reference_;
+  }
+  const float noise = (1.0f - verified_reference_ * verified_reference_) * verified_variance_;
+  const float r2 = 1.0f - noise / variance;
+  const float floor = 0.5f * verified_reference_;
+  if (!(r2 > floor * floor)) return floor;
+  const float r = correlation_from_signed_square(r2);
+  return r < verified_reference_ ? r : verified_reference_;
 }
 
 Status TrackingSession::vote_at(const ImageView& image, const Pose& centre, TrackerScratch scratch, StepResult& step) noexcept {
@@ -371,7 +401,7 @@ Status TrackingSession::track_fine(const ImageView& image, SessionScratch scratc
     // the best proposal correlates below verify_lost of the reference, there
     // is no measurement to trust (the filter coasts, and declares the target
     // lost if it stays so).
-    if (verdict_.found && verified_reference_ > 0.0f && verdict_.score < options_.verify_lost * verified_reference_)
+    if (verdict_.found && frame_reference_ > 0.0f && verdict_.score < options_.verify_lost * frame_reference_)
       confidence = Confidence::kNone;
     // And the other way: where the votes are too weak to trust (a dimmed
     // frame's edges fall below the detector's thresholds) but the verified

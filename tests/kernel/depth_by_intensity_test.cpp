@@ -207,6 +207,24 @@ TEST(CorrelationAt, AModelOnAFlatSurroundIsComparedOverItsOutlineNotTheClutter) 
   EXPECT_LT(everywhere, 0.2f);
 }
 
+// The frame's contrast over the samples a pose is scored on: the same
+// object at half the contrast has a quarter of the variance; outside the
+// frame there is none to tell.
+TEST(FrameVarianceAt, MeasuresTheContrastTheFrameShowsAtThePose) {
+  const auto stack = make_stack();
+  const Views v(stack);
+  const FocusStack fs{v.views, 20.0f, 20.0f, 1};
+  GrayImage bright = frame_with(stack[1], 60.0f, 48.0f, 0.0f), dim = bright;
+  for (std::uint8_t& p : dim.pixels) p = static_cast<std::uint8_t>(64 + p / 2);
+  float full = 0.0f, half = 0.0f;
+  ASSERT_TRUE(frame_variance_at(bright.view(), Pose{60.0f, 48.0f, 0.0f, 1}, fs, 1, full));
+  ASSERT_TRUE(frame_variance_at(dim.view(), Pose{60.0f, 48.0f, 0.0f, 1}, fs, 1, half));
+  EXPECT_NEAR(full, 6400.0f, 200.0f);  // stripes of 40 and 200, half each: (80)^2
+  EXPECT_NEAR(half / full, 0.25f, 0.01f);
+  float none = 0.0f;
+  EXPECT_FALSE(frame_variance_at(bright.view(), Pose{-500.0f, -500.0f, 0.0f, 1}, fs, 1, none));
+}
+
 TEST(DepthByIntensity, OutsideTheFrameLeavesTheDepthAlone) {
   const auto stack = make_stack();
   const Views v(stack);

@@ -73,6 +73,13 @@ inline constexpr std::uint32_t kMaxStackStep = 256;
 [[nodiscard]] bool correlation_at(const ImageView& frame, const Pose& pose, const FocusStack& stack, std::uint16_t depth,
                                   float& signed_r2) noexcept;
 
+// The variance of the frame's samples (grey levels squared) over the samples
+// correlation_at compares at `pose` with stack image `depth`: how much
+// contrast the frame shows there (a dimmed frame, less). False when fewer
+// than 16 samples fall inside the frame. Preconditions as correlation_at's.
+[[nodiscard]] bool frame_variance_at(const ImageView& frame, const Pose& pose, const FocusStack& stack, std::uint16_t depth,
+                                     float& variance) noexcept;
+
 // One Gauss-Newton step up the correlation at `pose`: the enhanced
 // correlation coefficient's maximisation (Evangelidis and Psarakis, "Parametric
 // image alignment using enhanced correlation coefficient maximization", IEEE

@@ -233,6 +233,9 @@ class TrackingSession {
   Verdict verdict_;            // verifying: this frame's
   bool verdict_taken_ = false;  // and whether its pose was taken
   float verified_reference_ = 0.0f;  // the running mean of confident frames' correlations (0: none yet)
+  float verified_variance_ = 0.0f;   // and of the frame's variance at their poses (frame_variance_at; 0: none yet)
+  float frame_reference_ = 0.0f;     // verified_reference_ as this frame's contrast allows (reference_at)
+  float reference_at(const ImageView& image, const Pose& pose) const noexcept;
 };
 
 }  // namespace gabarit
