@@ -103,6 +103,32 @@ host::SceneOptions walking_astronaut(host::SceneBackground background, std::uint
   return so;
 }
 
+// The horse over the moon, its light swinging +-50% every 60 frames: the
+// tuning scene gabarit synth --scene horse --background moon --light 0.5:60
+// --seed 300 makes.
+host::SceneOptions horse_in_changing_light(std::uint32_t frames) {
+  host::SceneOptions so;
+  so.object = host::SceneObject::kHorse;
+  so.background = host::SceneBackground::kMoon;
+  so.illumination = 0.5;
+  so.illumination_period = 60;
+  so.width = so.height = 0;  // the horse's own size
+  so.frames = frames;
+  so.seed = 300;
+  return so;
+}
+
+// gabarit track's defaults over a scene's frames: each frame's row.
+std::vector<app::TrackRow> track_with_defaults(const GrayScene& scene) {
+  const TableView table = testing::open_table(scene.bytes);
+  host::TrackingOptions options;
+  options.profile = app::SessionProfile{};
+  auto frames_in = app::open_frames((scene.dir / "frames.y4m").string());
+  std::vector<app::TrackRow> rows;
+  host::run_tracking(table, *frames_in, scene.start(), options, [&](const app::TrackRow& r) { rows.push_back(r); });
+  return rows;
+}
+
 // Vote, then verify, on a grayscale scene whose gain swings +-50% every 60
 // frames: in the dim trough the edges fall below the detector's thresholds
 // and the votes are too weak to trust, but the verified pose correlates as
@@ -137,23 +163,10 @@ TEST(Tracking, AGrayscaleSessionHoldsThroughAStrongIlluminationSwing) {
 // the vote alone it was taken 6 frames later (tools/scripts' light scenes,
 // docs/tracking.md).
 TEST(Tracking, AReacquisitionInADimFrameIsTakenByTheVerifiedScore) {
-  host::SceneOptions so;
-  so.object = host::SceneObject::kHorse;
-  so.background = host::SceneBackground::kMoon;
-  so.illumination = 0.5;
-  so.illumination_period = 60;
-  so.width = so.height = 0;  // the horse's own size
-  so.frames = 126;
-  so.seed = 300;
-  const GrayScene scene(so, "gabarit_dim_reacquisition");
-  const TableView table = testing::open_table(scene.bytes);
-  host::TrackingOptions options;
-  options.profile = app::SessionProfile{};  // gabarit track's defaults
-  auto frames_in = app::open_frames((scene.dir / "frames.y4m").string());
+  const GrayScene scene(horse_in_changing_light(126), "gabarit_dim_reacquisition");
   std::vector<app::PoseSample> poses;
-  host::run_tracking(table, *frames_in, scene.start(), options, [&](const app::TrackRow& r) {
+  for (const app::TrackRow& r : track_with_defaults(scene))
     poses.push_back({r.frame, r.step.pose.x, r.step.pose.y, r.step.pose.theta_deg, 0, true});
-  });
   const app::Accuracy a = app::evaluate(poses, scene.truth);
   ASSERT_EQ(a.reacquired_after.size(), 1u);
   EXPECT_GE(a.reacquired_after[0], 0);
@@ -171,31 +184,13 @@ TEST(Tracking, AReacquisitionInADimFrameIsTakenByTheVerifiedScore) {
 // pose, and the reference is held as the frame's contrast allows
 // (tracking_session.cpp, reference_at): every frame within 1 px, none lost.
 TEST(Tracking, AHorseInTheTroughOfALightSwingIsTrackedThroughIt) {
-  host::SceneOptions so;
-  so.object = host::SceneObject::kHorse;
-  so.background = host::SceneBackground::kMoon;
-  so.motion = host::SceneMotion::kSmooth;
-  so.illumination = 0.5;
-  so.illumination_period = 60;
-  so.width = so.height = 0;  // the horse's own size, as gabarit synth --scene horse
-  so.frames = 62;
-  so.seed = 300;  // a tuning scene: gabarit synth --scene horse --background moon --light 0.5:60 --seed 300
-  const GrayScene scene(so, "gabarit_dim_trough");
-  const TableView table = testing::open_table(scene.bytes);
-  host::TrackingOptions options;
-  options.profile = app::SessionProfile{};  // gabarit track's defaults
-  auto frames_in = app::open_frames((scene.dir / "frames.y4m").string());
-  std::vector<app::PoseSample> poses;
-  std::vector<TrackState> states;
-  host::run_tracking(table, *frames_in, scene.start(), options, [&](const app::TrackRow& r) {
-    poses.push_back({r.frame, r.step.pose.x, r.step.pose.y, r.step.pose.theta_deg, 0, true});
-    states.push_back(r.step.state);
-  });
-  ASSERT_EQ(poses.size(), 62u);
+  const GrayScene scene(horse_in_changing_light(62), "gabarit_dim_trough");
+  const std::vector<app::TrackRow> rows = track_with_defaults(scene);
+  ASSERT_EQ(rows.size(), 62u);
   for (std::uint32_t f = 30; f < 62; ++f) {
-    const double dx = poses[f].x - scene.truth[f].x, dy = poses[f].y - scene.truth[f].y;
+    const double dx = rows[f].step.pose.x - scene.truth[f].x, dy = rows[f].step.pose.y - scene.truth[f].y;
     EXPECT_LE(dx * dx + dy * dy, 1.0) << "frame " << f;
-    EXPECT_NE(states[f], TrackState::kLost) << "frame " << f;
+    EXPECT_NE(rows[f].step.state, TrackState::kLost) << "frame " << f;
   }
 }
 
@@ -236,13 +231,9 @@ TEST(Tracking, TheDepthIsComparedOnTheObjectNotOnThePageAroundIt) {
   ASSERT_EQ(frames, so.frames);
   EXPECT_GE(at_truth, frames * 85 / 100) << at_truth << " of " << frames;
 
-  host::TrackingOptions options;
-  options.profile = app::SessionProfile{};  // gabarit track's defaults
-  frames_in = app::open_frames((scene.dir / "frames.y4m").string());
   std::vector<app::PoseSample> poses;
-  host::run_tracking(table, *frames_in, scene.start(), options, [&](const app::TrackRow& r) {
+  for (const app::TrackRow& r : track_with_defaults(scene))
     poses.push_back({r.frame, r.step.pose.x, r.step.pose.y, r.step.pose.theta_deg, r.step.pose.depth, true});
-  });
   const app::Accuracy a = app::evaluate(poses, scene.truth);
   EXPECT_GE(a.depth_exact, a.frames * 90 / 100) << a.depth_exact << " of " << a.frames;
 }
