@@ -207,6 +207,40 @@ TEST(CorrelationAt, AModelOnAFlatSurroundIsComparedOverItsOutlineNotTheClutter) 
   EXPECT_LT(everywhere, 0.2f);
 }
 
+// A bright, faintly textured coin drawn on mid-grey, over a white page with
+// dark print: the model's surround is darker than the coin, the frame's
+// brighter. Its ring would pull the pose to where it falls on something
+// darker than the page (the coin's own edge, the print), so it is left out:
+// the true pose scores best of the pixel grid around it.
+TEST(CorrelationAt, TheOutlinesRingIsLeftOutWhereTheFrameIsBrighterAroundTheObject) {
+  GrayImage coin(41, 41, 128);
+  for (std::uint32_t v = 0; v < 41; ++v)
+    for (std::uint32_t u = 0; u < 41; ++u) {
+      const float du = static_cast<float>(u) - 20.0f, dv = static_cast<float>(v) - 20.0f;
+      if (du * du + dv * dv <= 144.0f)
+        coin.at(u, v) = static_cast<std::uint8_t>(round_to_int(190.0f + 0.2f * (fine_texture(static_cast<float>(u), static_cast<float>(v)) - 128.0f)));
+    }
+  GrayImage f(120, 100, 235);
+  for (std::uint32_t y = 0; y < f.height; ++y)
+    for (std::uint32_t x = 0; x < f.width; ++x)
+      if ((y / 3) % 3 == 0 && (x * 7 + y * 3) % 11 < 5) f.at(x, y) = 40;  // lines of print
+  for (std::uint32_t v = 0; v < 41; ++v)
+    for (std::uint32_t u = 0; u < 41; ++u)
+      if (coin.at(u, v) != 128) f.at(40 + u, 28 + v) = coin.at(u, v);
+  const std::vector<GrayImage> images{coin};
+  const Views views(images);
+  const FocusStack fs{views.views, 20.0f, 20.0f, 1};
+  float at_truth = 0.0f;
+  ASSERT_TRUE(correlation_at(f.view(), Pose{60.0f, 48.0f, 0.0f, 0}, fs, 0, at_truth));
+  for (int dy = -1; dy <= 1; ++dy)
+    for (int dx = -1; dx <= 1; ++dx) {
+      if (dx == 0 && dy == 0) continue;
+      float off = 0.0f;
+      ASSERT_TRUE(correlation_at(f.view(), Pose{60.0f + static_cast<float>(dx), 48.0f + static_cast<float>(dy), 0.0f, 0}, fs, 0, off));
+      EXPECT_LT(off, at_truth) << dx << "," << dy;
+    }
+}
+
 // The frame's contrast over the samples a pose is scored on: the same
 // object at half the contrast has a quarter of the variance; outside the
 // frame there is none to tell.
