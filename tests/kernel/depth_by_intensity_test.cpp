@@ -171,6 +171,27 @@ TEST(DepthByIntensity, AnObjectTooSmallForItsOwnSamplesIsComparedOverEverySample
   }
 }
 
+// A disc of radius 12 about (20, 20) in a 41 x 41 image of flat grey 128:
+// fine_texture scaled by `contrast` about `mean`.
+GrayImage textured_disc(float mean, float contrast) {
+  GrayImage disc(41, 41, 128);
+  for (std::uint32_t v = 0; v < 41; ++v)
+    for (std::uint32_t u = 0; u < 41; ++u) {
+      const float du = static_cast<float>(u) - 20.0f, dv = static_cast<float>(v) - 20.0f;
+      if (du * du + dv * dv <= 144.0f)
+        disc.at(u, v) = static_cast<std::uint8_t>(
+            round_to_int(mean + contrast * (fine_texture(static_cast<float>(u), static_cast<float>(v)) - 128.0f)));
+    }
+  return disc;
+}
+
+// The disc's own pixels (not its flat grey) pasted into `f` with (20, 20) at (60, 48).
+void paste_disc(GrayImage& f, const GrayImage& disc) {
+  for (std::uint32_t v = 0; v < 41; ++v)
+    for (std::uint32_t u = 0; u < 41; ++u)
+      if (disc.at(u, v) != 128) f.at(40 + u, 28 + v) = disc.at(u, v);
+}
+
 // A textured disc drawn on a flat grey, pasted over clutter: scoring a pose,
 // the model's flat surround is not compared with the clutter behind it (the
 // disc and a one-pixel ring around it are), so the true pose correlates as
@@ -178,13 +199,7 @@ TEST(DepthByIntensity, AnObjectTooSmallForItsOwnSamplesIsComparedOverEverySample
 // camera's crop) is compared over every sample, and the clutter pulls its
 // score down (r^2 0.10 against 0.65): that is what the support changes.
 TEST(CorrelationAt, AModelOnAFlatSurroundIsComparedOverItsOutlineNotTheClutter) {
-  GrayImage disc(41, 41, 128);
-  for (std::uint32_t v = 0; v < 41; ++v)
-    for (std::uint32_t u = 0; u < 41; ++u) {
-      const float du = static_cast<float>(u) - 20.0f, dv = static_cast<float>(v) - 20.0f;
-      if (du * du + dv * dv <= 144.0f)
-        disc.at(u, v) = static_cast<std::uint8_t>(round_to_int(fine_texture(static_cast<float>(u), static_cast<float>(v))));
-    }
+  const GrayImage disc = textured_disc(128.0f, 1.0f);
   GrayImage cropped = disc;  // its border one grey level off in places
   for (std::uint32_t u = 0; u < 41; u += 2) cropped.at(u, 0) = 129;
   GrayImage f(120, 100);
@@ -193,9 +208,7 @@ TEST(CorrelationAt, AModelOnAFlatSurroundIsComparedOverItsOutlineNotTheClutter) 
     state = state * 1664525u + 1013904223u;
     p = static_cast<std::uint8_t>(state >> 24);
   }
-  for (std::uint32_t v = 0; v < 41; ++v)
-    for (std::uint32_t u = 0; u < 41; ++u)
-      if (disc.at(u, v) != 128) f.at(40 + u, 28 + v) = disc.at(u, v);
+  paste_disc(f, disc);
   const Pose truth{60.0f, 48.0f, 0.0f, 0};
   const std::vector<GrayImage> flat{disc}, not_flat{cropped};
   const Views flat_views(flat), crop_views(not_flat);
@@ -213,20 +226,12 @@ TEST(CorrelationAt, AModelOnAFlatSurroundIsComparedOverItsOutlineNotTheClutter) 
 // darker than the page (the coin's own edge, the print), so it is left out:
 // the true pose scores best of the pixel grid around it.
 TEST(CorrelationAt, TheOutlinesRingIsLeftOutWhereTheFrameIsBrighterAroundTheObject) {
-  GrayImage coin(41, 41, 128);
-  for (std::uint32_t v = 0; v < 41; ++v)
-    for (std::uint32_t u = 0; u < 41; ++u) {
-      const float du = static_cast<float>(u) - 20.0f, dv = static_cast<float>(v) - 20.0f;
-      if (du * du + dv * dv <= 144.0f)
-        coin.at(u, v) = static_cast<std::uint8_t>(round_to_int(190.0f + 0.2f * (fine_texture(static_cast<float>(u), static_cast<float>(v)) - 128.0f)));
-    }
+  const GrayImage coin = textured_disc(190.0f, 0.2f);
   GrayImage f(120, 100, 235);
   for (std::uint32_t y = 0; y < f.height; ++y)
     for (std::uint32_t x = 0; x < f.width; ++x)
       if ((y / 3) % 3 == 0 && (x * 7 + y * 3) % 11 < 5) f.at(x, y) = 40;  // lines of print
-  for (std::uint32_t v = 0; v < 41; ++v)
-    for (std::uint32_t u = 0; u < 41; ++u)
-      if (coin.at(u, v) != 128) f.at(40 + u, 28 + v) = coin.at(u, v);
+  paste_disc(f, coin);
   const std::vector<GrayImage> images{coin};
   const Views views(images);
   const FocusStack fs{views.views, 20.0f, 20.0f, 1};
