@@ -391,7 +391,7 @@ Status TrackingSession::track_fine(const ImageView& image, SessionScratch scratc
     // the votes' confidence. Keeping the votes' choice, a horse over the moon
     // in the trough of a light swing walked 10 px off onto the moon's edges
     // and was lost (the test
-    // Tracking.InADimFrameTheVotesChoiceYieldsToABetterCorrelatedProposal).
+    // Tracking.AHorseInTheTroughOfALightSwingIsTrackedThroughIt).
     if (verdict_.found && !verdict_taken_ && verdict_.winner != 0) chosen = verdict_.pose;
     // Where the votes chose the depth clearly, they keep it (edge features
     // tell depths apart better than intensities over a textured object).
