@@ -7,9 +7,9 @@
 // and compared by normalised cross-correlation; the best-correlated image is
 // the depth. Where the stack images show the object on a flat surround
 // (their border one grey value), only the object's own samples are compared:
-// the frame shows something else behind it (depth_by_intensity.cpp,
-// ObjectSupport). The frame is sampled bilinearly in 1/256-pixel fixed point and
-// the sums are integers (the final ratio is one float division), so every
+// the frame shows something else behind it (kernel/src/intensity_samples.hpp,
+// ObjectSupport). The frame is sampled bilinearly in 1/256-pixel fixed point
+// and the sums are integers (the final ratio is one float division), so every
 // target gets the same answer; every
 // `step`-th model pixel in each direction is sampled.
 #pragma once
@@ -90,7 +90,7 @@ inline constexpr std::uint32_t kMaxStackStep = 256;
 // turned through the pose, times the gain between the frame's slope (central
 // differences of the bilinear samples) and the model's, least squares: the
 // clutter's and the noise's slopes, unrelated to the model's, would inflate
-// the curvature and shorten every step (depth_by_intensity.cpp, ecc_step).
+// the curvature and shorten every step (correlation_ascent.cpp, ecc_step).
 // One pass over the samples gives the step and, from the same exact integer
 // sums, correlation_at's value at `pose` (the same bits). The Jacobian's sums
 // are floats added per model row in one order: the same bits on every target.
