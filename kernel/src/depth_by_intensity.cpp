@@ -49,15 +49,9 @@ void correlations(const ImageView& frame, std::span<const ImageView> images, con
           s[i].ab += a * b;
         }
       });
-  // n^2 times the covariance and the variances, exact in 128 bits, then
-  // rounded once to float; the score sign(cov) cov^2 / (va vb) is taken as
-  // (cov / va) (cov / vb), whose factors cannot overflow (|cov| <= sqrt(va vb)).
-  const float vb = difference(f.n, f.bb, f.b, f.b);
   for (std::size_t i = 0; i < images.size(); ++i) {
-    const float cov = difference(f.n, s[i].ab, s[i].a, f.b);
-    const float va = difference(f.n, s[i].aa, s[i].a, s[i].a);
-    ok[i] = f.n >= 16 && va > 0.0f && vb > 0.0f;
-    scores[i] = ok[i] ? (cov >= 0.0f ? 1.0f : -1.0f) * (cov / va) * (cov / vb) : 0.0f;
+    scores[i] = 0.0f;
+    ok[i] = signed_r2(f, s[i], scores[i]);
   }
 }
 
@@ -79,11 +73,7 @@ bool outline_correlation(const ImageView& frame, const ImageView& m, const Pose&
   FrameSums f;
   ImageSums s;
   parts.compared(outline.surround(), f, s);
-  const float vb = difference(f.n, f.bb, f.b, f.b), cov = difference(f.n, s.ab, s.a, f.b);
-  const float va = difference(f.n, s.aa, s.a, s.a);
-  if (!(f.n >= 16 && va > 0.0f && vb > 0.0f)) return false;
-  score = (cov >= 0.0f ? 1.0f : -1.0f) * (cov / va) * (cov / vb);
-  return true;
+  return signed_r2(f, s, score);
 }
 
 bool correlation(const ImageView& frame, const ImageView& m, const Pose& pose, const FocusStack& stack,

@@ -283,6 +283,19 @@ struct OutlineParts {
   }
 };
 
+// The correlation from its exact sums, as sign(r) r^2: n^2 times the
+// covariance and the variances, exact in 128 bits, then rounded once to
+// float; sign(cov) cov^2 / (va vb) is taken as (cov / va) (cov / vb), whose
+// factors cannot overflow (|cov| <= sqrt(va vb)). False when fewer than 16
+// samples were summed or either side is flat.
+inline bool signed_r2(const FrameSums& f, const ImageSums& s, float& out) noexcept {
+  const float vb = difference(f.n, f.bb, f.b, f.b), cov = difference(f.n, s.ab, s.a, f.b);
+  const float va = difference(f.n, s.aa, s.a, s.a);
+  if (!(f.n >= 16 && va > 0.0f && vb > 0.0f)) return false;
+  out = (cov >= 0.0f ? 1.0f : -1.0f) * (cov / va) * (cov / vb);
+  return true;
+}
+
 inline void add_sample(FrameSums& f, ImageSums& s, std::uint64_t a, std::uint64_t b) noexcept {
   ++f.n;
   f.b += b;
