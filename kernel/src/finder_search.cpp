@@ -62,8 +62,10 @@ std::uint64_t stack_correlation_work(const FocusStack& stack, std::uint32_t corr
   if (stack.images.empty() || stack.step == 0) return 0;
   const ImageView& model = stack.images[0];
   const std::uint64_t samples = std::uint64_t{model.width} * model.height / (std::uint64_t{stack.step} * stack.step);
-  return samples * kUnitsPerStackSample * correlations;
+  return stack_sample_work(samples * correlations);
 }
+
+std::uint64_t stack_sample_work(std::uint64_t samples) noexcept { return samples * kUnitsPerStackSample; }
 
 Status FinderSearch::begin(std::uint32_t width, std::uint32_t height, const FinderOptions& options, FinderScratch scratch) noexcept {
   phase_ = Phase::kIdle;

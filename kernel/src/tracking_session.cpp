@@ -111,7 +111,7 @@ Status TrackingSession::step(const ImageView& image, SessionScratch scratch, Ses
   ledger_.add(FramePhase::kDepth, 0, read_ticks(clock_) - depth_began);
   if (out.confidence == Confidence::kHigh) last_confident_ = {pose_, filter_.state(), 0};
   if (stack_ != nullptr) {
-    ledger_.add(FramePhase::kVerify, stack_correlation_work(*stack_, verdict_.correlations), 0);
+    ledger_.add(FramePhase::kVerify, stack_sample_work(verdict_.samples), 0);
     ledger_.add(FramePhase::kDepth, stack_correlation_work(*stack_, out.correlations - verdict_.correlations), 0);
   }
   ledger_.correlations = out.correlations;

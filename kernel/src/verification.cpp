@@ -199,6 +199,12 @@ void ascend(const ImageView& frame, const FocusStack& fine, bool with_angle, flo
   }
 }
 
+// The samples one correlation with `stack` compares (walk_samples' grid).
+std::uint64_t samples_per_correlation(const FocusStack& stack) noexcept {
+  const ImageView& model = stack.images[0];
+  return std::uint64_t{(model.width + stack.step - 1) / stack.step} * ((model.height + stack.step - 1) / stack.step);
+}
+
 bool distinct(const Pose& a, const Pose& b, float distance_px) noexcept {
   const float dx = a.x - b.x, dy = a.y - b.y;
   return a.depth != b.depth || dx * dx + dy * dy >= distance_px * distance_px;
@@ -229,6 +235,7 @@ Status verify(const ImageView& frame, const FocusStack& stack, const Proposals& 
       out.winner = i;
     }
   }
+  out.samples = out.correlations * samples_per_correlation(stack);
   if (!out.found) return Status::kOk;
   if (out.winner != 0 && scored[0] && distinct(proposals.poses[0], proposals.poses[out.winner], options.distinct_px) &&
       correlation_from_signed_square(scores[0]) >= correlation_from_signed_square(scores[out.winner]) - options.tie_margin) {
@@ -255,6 +262,7 @@ Status verify(const ImageView& frame, const FocusStack& stack, const Proposals& 
     float spacing_deg = options.spacing_px / reach * 57.2957795f;
     spacing_deg = spacing_deg < 0.1f ? 0.1f : (spacing_deg > 1.0f ? 1.0f : spacing_deg);
     float fine_score = 0.0f;
+    const std::uint32_t scored_before = out.correlations;
     if (options.refine_by == RefineBy::kGaussNewton) {
       fine_score = score;  // replaced by the first pass's, at the fine step
       ascend(frame, fine, options.refine_angle, reach, won, options.max_offset_px, options.max_angle_spacings * spacing_deg, pose, fine_score,
@@ -271,8 +279,10 @@ Status verify(const ImageView& frame, const FocusStack& stack, const Proposals& 
         }
       }
     }
+    out.samples += (out.correlations - scored_before) * samples_per_correlation(fine);
     if (fine.step != stack.step) {
       ++out.correlations;
+      out.samples += samples_per_correlation(stack);
       if (!correlation_at(frame, pose, stack, pose.depth, score)) score = fine_score;
     } else {
       score = fine_score;

@@ -48,6 +48,8 @@ std::uint64_t feature_extraction_work(std::uint64_t pixels) noexcept;
 // The work of `correlations` correlations of a stack image with a frame
 // (depth_by_intensity.hpp), in the same units.
 std::uint64_t stack_correlation_work(const FocusStack& stack, std::uint32_t correlations) noexcept;
+// The work of comparing `samples` model samples with a frame (Verdict::samples).
+std::uint64_t stack_sample_work(std::uint64_t samples) noexcept;
 
 inline constexpr std::uint64_t kUnlimitedWork = ~std::uint64_t{0};
 

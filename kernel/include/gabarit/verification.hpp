@@ -58,7 +58,7 @@ inline constexpr int kAscentPasses = 6;
 // A Gauss-Newton pass reads each sample's 4 x 4 frame neighbourhood and the
 // model's neighbours and adds fifteen products: it took about as long as two
 // correlations on the suite (docs/performance.md), so it counts as two in
-// Verdict::correlations.
+// Verdict::correlations and Verdict::samples.
 inline constexpr std::uint32_t kAscentPassCost = 2;
 
 struct VerifyOptions {
@@ -104,7 +104,12 @@ struct Verdict {
   float score = 0.0f;        // its correlation r, -1..1
   float runner_up = -1.0f;   // the best distinct proposal's r (-1 without one)
   std::uint32_t winner = 0;  // the index of the winning proposal
-  std::uint32_t correlations = 0;  // correlations computed (the cost)
+  std::uint32_t correlations = 0;  // correlations computed
+  // The model samples those correlations compared (an ascent pass's counted
+  // kAscentPassCost times): the cost, in the frame ledger's terms. The
+  // refinement may sample a small model more finely than the stack's step
+  // (refine_samples), so correlations alone undercount it.
+  std::uint64_t samples = 0;
 };
 
 // kInvalidArgument for an invalid frame or stack, or a proposal outside
