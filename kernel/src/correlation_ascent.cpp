@@ -84,7 +84,7 @@ bool ecc_step(const AscentSums& s, float n, float t_sum, float b_sum, float tb, 
 namespace {
 
 bool ascent_over(const ImageView& frame, const Pose& pose, const FocusStack& stack, std::uint16_t depth, bool with_angle,
-                 const ObjectSupport* support, CorrelationAscent& out) noexcept {
+                 const ObjectSupport* support, OutlineRing ring, CorrelationAscent& out) noexcept {
   out = CorrelationAscent{};
   const ImageView& m = stack.images[depth];
   OutlineParts parts;  // every sample counts as the object's without a support
@@ -137,12 +137,12 @@ bool ascent_over(const ImageView& frame, const Pose& pose, const FocusStack& sta
       });
   total.add(row);
   ring_total.add(ring_row);
-  // The ring where it agrees (OutlineParts), as correlation_at compares.
+  // The ring as `ring` says (OutlineParts), as correlation_at compares.
   FrameSums f;
   ImageSums s;
   const std::uint8_t surround = support != nullptr ? support->surround() : 0;
-  parts.compared(surround, f, s);
-  if (parts.ring_frame.n > 0 && parts.ring_agrees(surround)) total.add(ring_total);
+  parts.compared(surround, ring, f, s);
+  if (parts.ring_used(surround, ring)) total.add(ring_total);
   const float vb = difference(f.n, f.bb, f.b, f.b), cov = difference(f.n, s.ab, s.a, f.b);
   const float va = difference(f.n, s.aa, s.a, s.a);
   if (!(f.n >= 16 && va > 0.0f && vb > 0.0f)) return false;
@@ -169,10 +169,10 @@ bool ascent_over(const ImageView& frame, const Pose& pose, const FocusStack& sta
 
 // Over the model's outline, as correlation_at.
 bool correlation_ascent_at(const ImageView& frame, const Pose& pose, const FocusStack& stack, std::uint16_t depth,
-                           bool with_angle, CorrelationAscent& out) noexcept {
+                           bool with_angle, CorrelationAscent& out, OutlineRing ring) noexcept {
   const ObjectSupport outline(stack.images.subspan(depth, 1), ObjectSupport::kOutline);
-  return (outline.flat() && ascent_over(frame, pose, stack, depth, with_angle, &outline, out)) ||
-         ascent_over(frame, pose, stack, depth, with_angle, nullptr, out);
+  return (outline.flat() && ascent_over(frame, pose, stack, depth, with_angle, &outline, ring, out)) ||
+         ascent_over(frame, pose, stack, depth, with_angle, nullptr, ring, out);
 }
 
 }  // namespace gabarit

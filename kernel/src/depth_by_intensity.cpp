@@ -59,7 +59,7 @@ void correlations(const ImageView& frame, std::span<const ImageView> images, con
 // over every sample if it has none, or too few of the outline's fall in the
 // frame.
 bool outline_correlation(const ImageView& frame, const ImageView& m, const Pose& pose, const FocusStack& stack,
-                         const ObjectSupport& outline, float& score) noexcept {
+                         const ObjectSupport& outline, OutlineRing ring, float& score, bool& ring_compared) noexcept {
   OutlineParts parts;
   std::uint32_t model_v = 0;
   walk_samples(
@@ -72,15 +72,17 @@ bool outline_correlation(const ImageView& frame, const ImageView& m, const Pose&
       });
   FrameSums f;
   ImageSums s;
-  parts.compared(outline.surround(), f, s);
+  parts.compared(outline.surround(), ring, f, s);
+  ring_compared = parts.ring_used(outline.surround(), ring);
   return signed_r2(f, s, score);
 }
 
-bool correlation(const ImageView& frame, const ImageView& m, const Pose& pose, const FocusStack& stack,
-                 float& score) noexcept {
+bool correlation(const ImageView& frame, const ImageView& m, const Pose& pose, const FocusStack& stack, OutlineRing ring,
+                 float& score, bool& ring_compared) noexcept {
   const std::span<const ImageView> image(&m, 1);
   const ObjectSupport outline(image, ObjectSupport::kOutline);
-  if (outline.flat() && outline_correlation(frame, m, pose, stack, outline, score)) return true;
+  if (outline.flat() && outline_correlation(frame, m, pose, stack, outline, ring, score, ring_compared)) return true;
+  ring_compared = false;
   bool ok = false;
   correlations(frame, image, pose, stack, &score, &ok);
   return ok;
@@ -110,7 +112,13 @@ bool valid_focus_stack(const FocusStack& stack) noexcept {
 
 bool correlation_at(const ImageView& frame, const Pose& pose, const FocusStack& stack, std::uint16_t depth,
                     float& signed_r2) noexcept {
-  return correlation(frame, stack.images[depth], pose, stack, signed_r2);
+  bool ring_compared = false;
+  return correlation(frame, stack.images[depth], pose, stack, OutlineRing::kWhereItAgrees, signed_r2, ring_compared);
+}
+
+bool correlation_at(const ImageView& frame, const Pose& pose, const FocusStack& stack, std::uint16_t depth, OutlineRing ring,
+                    float& signed_r2, bool& ring_compared) noexcept {
+  return correlation(frame, stack.images[depth], pose, stack, ring, signed_r2, ring_compared);
 }
 
 bool frame_variance_at(const ImageView& frame, const Pose& pose, const FocusStack& stack, std::uint16_t depth,
@@ -179,11 +187,16 @@ Status angle_by_intensity(const ImageView& frame, const Pose& pose, const FocusS
   const ImageView& m = stack.images[pose.depth];
   float scores[2 * kAngleSteps + 1];
   int best = -1;
+  // One choice of the outline's ring for every angle compared (OutlineRing):
+  // the first angle's.
+  OutlineRing ring = OutlineRing::kWhereItAgrees;
   for (int k = -kAngleSteps; k <= kAngleSteps; ++k) {
     Pose p = pose;
     p.theta_deg = pose.theta_deg + static_cast<float>(k) * kAngleIncrementDeg;
     float score = 0.0f;
-    if (!correlation(frame, m, p, stack, score)) return Status::kOk;  // leaving the frame: keep the angle
+    bool ring_compared = false;
+    if (!correlation(frame, m, p, stack, ring, score, ring_compared)) return Status::kOk;  // leaving the frame: keep the angle
+    if (ring == OutlineRing::kWhereItAgrees) ring = ring_compared ? OutlineRing::kCompared : OutlineRing::kLeftOut;
     scores[k + kAngleSteps] = score;
     if (best < 0 || score > scores[best]) best = k + kAngleSteps;
   }

@@ -273,11 +273,16 @@ struct OutlineParts {
     const int frame_side = less(frame_object, frame_ring) ? 1 : (less(frame_ring, frame_object) ? -1 : 0);
     return model_side * frame_side >= 0;
   }
-  // The sums compared: the object's, with the ring's where it agrees.
-  void compared(std::uint8_t surround, FrameSums& f, ImageSums& s) const noexcept {
+  // Whether the ring is compared: as `ring` says, or where it agrees.
+  bool ring_used(std::uint8_t surround, OutlineRing ring) const noexcept {
+    if (ring_frame.n == 0) return false;
+    return ring == OutlineRing::kCompared || (ring == OutlineRing::kWhereItAgrees && ring_agrees(surround));
+  }
+  // The sums compared: the object's, with the ring's where it is used.
+  void compared(std::uint8_t surround, OutlineRing ring, FrameSums& f, ImageSums& s) const noexcept {
     f = object_frame;
     s = object_model;
-    if (!ring_agrees(surround)) return;
+    if (!ring_used(surround, ring)) return;
     f.n += ring_frame.n, f.b += ring_frame.b, f.bb += ring_frame.bb;
     s.a += ring_model.a, s.aa += ring_model.aa, s.ab += ring_model.ab;
   }

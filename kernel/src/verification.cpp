@@ -117,8 +117,9 @@ bool quadratic_peak(const float (&f)[kSamples], bool with_angle, Vector3& peak) 
 // whose score is `score`: the fitted peak if it scores better than every
 // sample, else the best sample. False (centre unchanged) when a sample falls
 // outside the frame.
-bool refine_round(const ImageView& frame, const FocusStack& stack, float step_px, float step_deg, bool with_angle, Pose& centre,
-                  float& score, std::uint32_t& correlations) noexcept {
+bool refine_round(const ImageView& frame, const FocusStack& stack, OutlineRing ring, float step_px, float step_deg, bool with_angle,
+                  Pose& centre, float& score, std::uint32_t& correlations) noexcept {
+  bool ring_compared = false;
   float f[kSamples] = {};
   f[0] = score;
   int best = 0;
@@ -126,7 +127,7 @@ bool refine_round(const ImageView& frame, const FocusStack& stack, float step_px
     if (!with_angle && !in_plane(k)) continue;
     const Pose p = moved(centre, kDesign[k].x * step_px, kDesign[k].y * step_px, kDesign[k].t * step_deg);
     ++correlations;
-    if (!correlation_at(frame, p, stack, centre.depth, f[k])) return false;
+    if (!correlation_at(frame, p, stack, centre.depth, ring, f[k], ring_compared)) return false;
     if (f[k] > f[best]) best = k;
   }
   Vector3 peak;
@@ -134,7 +135,7 @@ bool refine_round(const ImageView& frame, const FocusStack& stack, float step_px
     const Pose p = moved(centre, peak(0) * step_px, peak(1) * step_px, peak(2) * step_deg);
     float at_peak = 0.0f;
     ++correlations;
-    if (correlation_at(frame, p, stack, centre.depth, at_peak) && at_peak >= f[best]) {
+    if (correlation_at(frame, p, stack, centre.depth, ring, at_peak, ring_compared) && at_peak >= f[best]) {
       centre = p;
       score = at_peak;
       return true;
@@ -164,8 +165,8 @@ float clamp_to(float v, float bound) noexcept { return v > bound ? bound : (v < 
 // pixel (the angle: one pixel at the outline's reach); x and y stay within
 // `bound_px` of `anchor` and the angle within `bound_deg`. `pose` and
 // `score` end at the best pose scored (at the fine step).
-void ascend(const ImageView& frame, const FocusStack& fine, bool with_angle, float reach_px, const Pose& anchor, float bound_px,
-            float bound_deg, Pose& pose, float& score, std::uint32_t& correlations) noexcept {
+void ascend(const ImageView& frame, const FocusStack& fine, OutlineRing ring, bool with_angle, float reach_px, const Pose& anchor,
+            float bound_px, float bound_deg, Pose& pose, float& score, std::uint32_t& correlations) noexcept {
   constexpr float kDegrees = 57.2957795f;
   const float max_deg = kDegrees / reach_px;
   Pose at = pose;
@@ -182,7 +183,7 @@ void ascend(const ImageView& frame, const FocusStack& fine, bool with_angle, flo
   for (int pass = 0; pass < kAscentPasses; ++pass) {
     CorrelationAscent a;
     correlations += kAscentPassCost;
-    const bool ok = correlation_ascent_at(frame, at, fine, at.depth, with_angle, a);
+    const bool ok = correlation_ascent_at(frame, at, fine, at.depth, with_angle, a, ring);
     if (!ok && !scored) return;
     if (!ok || (scored && !(a.signed_r2 > score))) {
       if (++halvings > 2 || !step_to(0.5f)) return;
@@ -227,9 +228,15 @@ Status verify(const ImageView& frame, const FocusStack& stack, const Proposals& 
   }
   float scores[kMaxProposals];
   bool scored[kMaxProposals];
+  // Every pose of the frame scored over the same samples: the outline's
+  // ring compared or not as it is at the first proposal scored (the
+  // caller's own choice, where it lies in the frame; OutlineRing).
+  OutlineRing ring = OutlineRing::kWhereItAgrees;
+  bool ring_compared = false;
   for (std::uint32_t i = 0; i < proposals.count; ++i) {
     ++out.correlations;
-    scored[i] = correlation_at(frame, proposals.poses[i], stack, proposals.poses[i].depth, scores[i]);
+    scored[i] = correlation_at(frame, proposals.poses[i], stack, proposals.poses[i].depth, ring, scores[i], ring_compared);
+    if (scored[i] && ring == OutlineRing::kWhereItAgrees) ring = ring_compared ? OutlineRing::kCompared : OutlineRing::kLeftOut;
     if (scored[i] && (!out.found || scores[i] > scores[out.winner])) {
       out.found = true;
       out.winner = i;
@@ -265,17 +272,17 @@ Status verify(const ImageView& frame, const FocusStack& stack, const Proposals& 
     const std::uint32_t scored_before = out.correlations;
     if (options.refine_by == RefineBy::kGaussNewton) {
       fine_score = score;  // replaced by the first pass's, at the fine step
-      ascend(frame, fine, options.refine_angle, reach, won, options.max_offset_px, options.max_angle_spacings * spacing_deg, pose, fine_score,
-             out.correlations);
+      ascend(frame, fine, ring, options.refine_angle, reach, won, options.max_offset_px, options.max_angle_spacings * spacing_deg, pose,
+             fine_score, out.correlations);
     } else {
       ++out.correlations;
-      if (!correlation_at(frame, pose, fine, pose.depth, fine_score)) fine = stack, fine_score = score;
+      if (!correlation_at(frame, pose, fine, pose.depth, ring, fine_score, ring_compared)) fine = stack, fine_score = score;
       float step_px = options.spacing_px, step_deg = spacing_deg;
       for (int round = 0; round < kRefineRounds; ++round, step_px *= 0.5f, step_deg *= 0.5f) {
-        if (!refine_round(frame, fine, step_px, step_deg, options.refine_angle, pose, fine_score, out.correlations)) break;
+        if (!refine_round(frame, fine, ring, step_px, step_deg, options.refine_angle, pose, fine_score, out.correlations)) break;
         if (clamp_near(won, options.max_offset_px, pose)) {
           ++out.correlations;
-          if (!correlation_at(frame, pose, fine, pose.depth, fine_score)) break;
+          if (!correlation_at(frame, pose, fine, pose.depth, ring, fine_score, ring_compared)) break;
         }
       }
     }
@@ -283,7 +290,7 @@ Status verify(const ImageView& frame, const FocusStack& stack, const Proposals& 
     if (fine.step != stack.step) {
       ++out.correlations;
       out.samples += samples_per_correlation(stack);
-      if (!correlation_at(frame, pose, stack, pose.depth, score)) score = fine_score;
+      if (!correlation_at(frame, pose, stack, pose.depth, ring, score, ring_compared)) score = fine_score;
     } else {
       score = fine_score;
     }

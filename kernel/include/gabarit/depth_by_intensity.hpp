@@ -73,6 +73,23 @@ inline constexpr std::uint32_t kMaxStackStep = 256;
 [[nodiscard]] bool correlation_at(const ImageView& frame, const Pose& pose, const FocusStack& stack, std::uint16_t depth,
                                   float& signed_r2) noexcept;
 
+// Whether an outline's ring of surround is compared. Alone, correlation_at
+// compares it where the frame's surround stands against the object on the
+// side the model's surround does (kWhereItAgrees), decided at each pose.
+// Poses that are compared with one another (a frame's proposals and the
+// refinement between them) need one choice for all: decided pose by pose,
+// the score jumps where the frame's ring mean crosses the object's (on a
+// coin over a printed page, by a third of itself between poses half a pixel
+// apart), and the best-scored pose is where the ring happened to be left
+// out, not where the model fits (docs/tracking.md, "Vote, then verify").
+enum class OutlineRing : std::uint8_t { kWhereItAgrees, kCompared, kLeftOut };
+// correlation_at with the ring as `ring` says; `ring_compared` tells whether
+// the ring was in the sums (false without a ring: a model with no flat
+// surround, or the fallback to every sample), so that a caller can fix
+// kWhereItAgrees's choice at one pose for the others.
+[[nodiscard]] bool correlation_at(const ImageView& frame, const Pose& pose, const FocusStack& stack, std::uint16_t depth,
+                                  OutlineRing ring, float& signed_r2, bool& ring_compared) noexcept;
+
 // The variance of the frame's samples (grey levels squared) over the samples
 // correlation_at compares at `pose` with stack image `depth`: how much
 // contrast the frame shows there (a dimmed frame, less). False when fewer
@@ -104,7 +121,8 @@ struct CorrelationAscent {
 // the angle is not observable (a near-circular outline) the step is x and y
 // only too. Preconditions as correlation_at's.
 [[nodiscard]] bool correlation_ascent_at(const ImageView& frame, const Pose& pose, const FocusStack& stack, std::uint16_t depth,
-                                         bool with_angle, CorrelationAscent& out) noexcept;
+                                         bool with_angle, CorrelationAscent& out,
+                                         OutlineRing ring = OutlineRing::kWhereItAgrees) noexcept;
 
 inline constexpr int kAngleSteps = 2;
 inline constexpr float kAngleIncrementDeg = 0.75f;
