@@ -309,39 +309,41 @@ TEST(AngleByIntensity, FindsTheAngleBetweenTheVotesCells) {
 // grey right of it: the frame's ring around the coin stands near the coin's
 // own mean, so whether it stands on the model's side (darker than the coin)
 // changes between poses half a pixel apart.
-GrayImage coin_over_two_greys(const GrayImage& coin) {
-  GrayImage f(120, 100, 235);
-  for (std::uint32_t y = 0; y < f.height; ++y)
-    for (std::uint32_t x = 60; x < f.width; ++x) f.at(x, y) = 140;
-  paste_disc(f, coin);
-  return f;
-}
+struct CoinOverTwoGreys {
+  GrayImage coin = textured_disc(190.0f, 0.2f);
+  GrayImage frame = GrayImage(120, 100, 235);
+  std::vector<GrayImage> images{coin};
+  Views views{images};
+  FocusStack stack{views.views, 20.0f, 20.0f, 1};
+  Pose truth{60.0f, 48.0f, 0.0f, 0}, left{59.5f, 48.0f, 0.0f, 0};
+  CoinOverTwoGreys() {
+    for (std::uint32_t y = 0; y < frame.height; ++y)
+      for (std::uint32_t x = 60; x < frame.width; ++x) frame.at(x, y) = 140;
+    paste_disc(frame, coin);
+  }
+};
 
 // At the true pose the frame's ring is darker than the coin, as the model's
 // is: compared (r^2 0.04, the model's mid-grey against the white page),
 // and left out when the caller says so (1.0, the coin alone). Half a pixel
 // to the left it is brighter: left out by itself (0.44).
 TEST(CorrelationAt, TheRingIsComparedOrLeftOutAsTheCallerSays) {
-  const GrayImage coin = textured_disc(190.0f, 0.2f);
-  const GrayImage f = coin_over_two_greys(coin);
-  const std::vector<GrayImage> images{coin};
-  const Views views(images);
-  const FocusStack fs{views.views, 20.0f, 20.0f, 1};
-  const Pose truth{60.0f, 48.0f, 0.0f, 0}, left{59.5f, 48.0f, 0.0f, 0};
+  const CoinOverTwoGreys c;
+  const ImageView f = c.frame.view();
   float where = 0.0f, with = 0.0f, without = 0.0f, plain = 0.0f;
   bool compared = false;
-  ASSERT_TRUE(correlation_at(f.view(), truth, fs, 0, OutlineRing::kWhereItAgrees, where, compared));
+  ASSERT_TRUE(correlation_at(f, c.truth, c.stack, 0, OutlineRing::kWhereItAgrees, where, compared));
   EXPECT_TRUE(compared);
-  ASSERT_TRUE(correlation_at(f.view(), truth, fs, 0, OutlineRing::kCompared, with, compared));
+  ASSERT_TRUE(correlation_at(f, c.truth, c.stack, 0, OutlineRing::kCompared, with, compared));
   EXPECT_TRUE(compared);
   EXPECT_EQ(where, with);
-  ASSERT_TRUE(correlation_at(f.view(), truth, fs, 0, OutlineRing::kLeftOut, without, compared));
+  ASSERT_TRUE(correlation_at(f, c.truth, c.stack, 0, OutlineRing::kLeftOut, without, compared));
   EXPECT_FALSE(compared);
   EXPECT_GT(without, 0.99f);
   EXPECT_LT(with, 0.1f);
-  ASSERT_TRUE(correlation_at(f.view(), truth, fs, 0, plain));  // the five-argument form: where it agrees
+  ASSERT_TRUE(correlation_at(f, c.truth, c.stack, 0, plain));  // the five-argument form: where it agrees
   EXPECT_EQ(plain, where);
-  ASSERT_TRUE(correlation_at(f.view(), left, fs, 0, OutlineRing::kWhereItAgrees, where, compared));
+  ASSERT_TRUE(correlation_at(f, c.left, c.stack, 0, OutlineRing::kWhereItAgrees, where, compared));
   EXPECT_FALSE(compared);
   EXPECT_GT(where, 0.4f);
 }
@@ -351,12 +353,9 @@ TEST(CorrelationAt, TheRingIsComparedOrLeftOutAsTheCallerSays) {
 // proposal over the same samples, the ring as the first proposal scored
 // has it, and the truth wins whichever comes first.
 TEST(Verification, EveryProposalOfAFrameIsScoredOverTheSameSamples) {
-  const GrayImage coin = textured_disc(190.0f, 0.2f);
-  const GrayImage f = coin_over_two_greys(coin);
-  const std::vector<GrayImage> images{coin};
-  const Views views(images);
-  const FocusStack fs{views.views, 20.0f, 20.0f, 1};
-  const Pose truth{60.0f, 48.0f, 0.0f, 0}, left{59.5f, 48.0f, 0.0f, 0};
+  const CoinOverTwoGreys c;
+  const Pose& truth = c.truth;
+  const Pose& left = c.left;
   VerifyOptions o;
   o.refine = false;
   for (const bool truth_first : {true, false}) {
@@ -364,7 +363,7 @@ TEST(Verification, EveryProposalOfAFrameIsScoredOverTheSameSamples) {
     p.add(truth_first ? truth : left);
     p.add(truth_first ? left : truth);
     Verdict v;
-    ASSERT_EQ(verify(f.view(), fs, p, o, v), Status::kOk);
+    ASSERT_EQ(verify(c.frame.view(), c.stack, p, o, v), Status::kOk);
     ASSERT_TRUE(v.found);
     EXPECT_EQ(v.pose.x, truth.x) << "truth first: " << truth_first;
   }
