@@ -127,7 +127,7 @@ Status TrackingSession::step(const ImageView& image, SessionScratch scratch, Ses
     surveyed_ = true;
     if (!detection_->surveyed()) {
       const std::uint64_t survey_began = read_ticks(clock_);
-      GABARIT_TRY(detection_->survey(image, pose_, scratch.fine, detection_budget(options_.survey_frames)));
+      GABARIT_TRY(detection_->survey(image, pose_, scratch.fine, survey_budget(image)));
       ledger_.add(FramePhase::kSurvey, detection_->last_work(), read_ticks(clock_) - survey_began);
     }
   }
@@ -144,6 +144,12 @@ std::uint64_t TrackingSession::detection_budget(float frames) const noexcept {
   const std::uint64_t frame = frame_work_ > 0 ? frame_work_ : track_step_work(fine_, StepResult{});
   const float budget = frames * static_cast<float>(frame);
   return budget >= 1.0f ? static_cast<std::uint64_t>(budget) : 1;
+}
+
+std::uint64_t TrackingSession::survey_budget(const ImageView& image) const noexcept {
+  const std::uint64_t budget = detection_budget(options_.survey_frames);
+  const std::uint64_t floor = std::uint64_t{image.width} * image.height * kSurveyUnitsPerPixel;
+  return budget > floor ? budget : floor;
 }
 
 // The confidence ratios (none below low_ratio of the reference score) tell

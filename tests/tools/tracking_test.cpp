@@ -269,6 +269,26 @@ TEST(Tracking, TheSurveyForLookalikesIsSpreadOverTheFirstFrames) {
 }
 
 
+// The survey of a small model's wide frame (the suite's 36 x 32 px object
+// on 640 x 480 gravel) ends within the first frames: its budget a frame is
+// at least kSurveyUnitsPerPixel a pixel. In tracked frames' work alone, a
+// model this small surveyed its frame in about 150 frames, so the survey
+// taxed every frame of the sequence and had told nothing by its end.
+TEST(Tracking, ASmallModelsSurveyOfAWideFrameEndsWithinTheFirstFrames) {
+  host::SceneOptions so = walking_astronaut(host::SceneBackground::kGravel, 40, 33);
+  so.object = host::SceneObject::kSmall;
+  so.width = 640;
+  so.height = 480;
+  const GrayScene scene(so, "gabarit_small_survey");
+  std::uint32_t last_surveyed = 0;
+  for (const app::TrackRow& r : track_with_defaults(scene)) {
+    EXPECT_NE(r.step.state, TrackState::kLost) << r.frame;
+    if (r.ledger.work[static_cast<int>(FramePhase::kSurvey)] > 0) last_surveyed = r.frame;
+  }
+  EXPECT_GT(last_surveyed, 0u);  // spread over frames, not done in the first
+  EXPECT_LE(last_surveyed, 20u);
+}
+
 // The frame-cost ledger from the hosted session (gabarit track --stats,
 // bench --suite): every phase a grayscale frame runs is charged, in work
 // and in time, and the phases' time is within the frame's.

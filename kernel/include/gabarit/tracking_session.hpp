@@ -101,9 +101,10 @@ struct SessionOptions {
   float verified_depth_switch = 0.002f;
   // With a detection stage, verifying: the work the survey for look-alikes
   // may spend after a tracked frame, in tracked frames (the running mean of
-  // their work, finder_search.hpp); it goes on over the next frames until it
-  // has covered the frame. 0: the whole survey after the first frame (a frame
-  // 30 to 100 times the median on the scene suite's wide frames).
+  // their work, finder_search.hpp), and at least kSurveyUnitsPerPixel a pixel
+  // of the frame; it goes on over the next frames until it has covered the
+  // frame. 0: the whole survey after the first frame (a frame 30 to 100
+  // times the median on the scene suite's wide frames).
   float survey_frames = 2.0f;
   // Likewise for a lost frame's search (0, the default: each search in the
   // frame that needs it; the search's area, where the target can be, bounds
@@ -144,6 +145,14 @@ struct SessionResult {
   // (frame_ledger.hpp).
   FrameLedger ledger;
 };
+
+// The survey's least work a tracked frame, per pixel of the frame: a whole
+// frame's survey costs about 150 units a pixel on the scene suite's frames
+// whatever the model's size (the coarse level scales with it), so it ends
+// within about 16 tracked frames. In tracked frames' work alone, a small
+// model's (36 x 32 px on a 640 x 480 frame) took about 150 frames, a loss
+// restarted it, and it never ended: it taxed every frame and told nothing.
+inline constexpr std::uint64_t kSurveyUnitsPerPixel = 10;
 
 class TrackingSession {
  public:
@@ -229,6 +238,7 @@ class TrackingSession {
   FrameLedger ledger_;             // this frame's so far
   TickSource clock_ = nullptr;
   std::uint64_t detection_budget(float frames) const noexcept;
+  std::uint64_t survey_budget(const ImageView& image) const noexcept;
   float depth_margin_ = 0.0f;  // this frame's measurement's (0 without one)
   Verdict verdict_;            // verifying: this frame's
   bool verdict_taken_ = false;  // and whether its pose was taken
