@@ -265,8 +265,9 @@ std::vector<Option> session_option_group() {
                                      "began on, and what it finds is caught up with (docs/detection.md); 0..1000" + indent +
                                      "(default 0: each search in one frame)"},
       {"--survey-frames", "N", "--recovery detect (and auto), verifying: the look-alike survey's work after each" + indent +
-                                   "tracked frame, in tracked frames' work, until it has covered the frame; 0..1000" + indent +
-                                   "(default 2; 0: the whole survey after the first frame)"},
+                                   "tracked frame, in tracked frames' work (at least 10 units a pixel of the frame)," + indent +
+                                   "until it has covered the frame; 0..1000 (default 2; 0: the whole survey after" + indent +
+                                   "the first frame)"},
       {"--subcell", "parabola|alignment", "how refinement places the pose within the cell: a parabola through the" + indent +
                                               "neighbouring cells' scores (default), or a least-squares alignment of the" + indent +
                                               "matched features (docs/tracking.md compares them)"},
