@@ -60,9 +60,7 @@ std::uint64_t track_step_work(const TableView& table, const StepResult& step) no
 
 std::uint64_t stack_correlation_work(const FocusStack& stack, std::uint32_t correlations) noexcept {
   if (stack.images.empty() || stack.step == 0) return 0;
-  const ImageView& model = stack.images[0];
-  const std::uint64_t samples = std::uint64_t{model.width} * model.height / (std::uint64_t{stack.step} * stack.step);
-  return stack_sample_work(samples * correlations);
+  return stack_sample_work(samples_per_correlation(stack) * correlations);
 }
 
 std::uint64_t stack_sample_work(std::uint64_t samples) noexcept { return samples * kUnitsPerStackSample; }

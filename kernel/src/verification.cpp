@@ -200,12 +200,6 @@ void ascend(const ImageView& frame, const FocusStack& fine, OutlineRing ring, bo
   }
 }
 
-// The samples one correlation with `stack` compares (walk_samples' grid).
-std::uint64_t samples_per_correlation(const FocusStack& stack) noexcept {
-  const ImageView& model = stack.images[0];
-  return std::uint64_t{(model.width + stack.step - 1) / stack.step} * ((model.height + stack.step - 1) / stack.step);
-}
-
 bool distinct(const Pose& a, const Pose& b, float distance_px) noexcept {
   const float dx = a.x - b.x, dy = a.y - b.y;
   return a.depth != b.depth || dx * dx + dy * dy >= distance_px * distance_px;

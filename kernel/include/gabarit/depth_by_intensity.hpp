@@ -60,6 +60,13 @@ inline constexpr std::uint32_t kMaxStackStep = 256;
 // size within the bounds, a step in 1..kMaxStackStep, at most 65535 depths.
 [[nodiscard]] bool valid_focus_stack(const FocusStack& stack) noexcept;
 
+// The samples one correlation with `stack` walks: every step-th pixel of a
+// stack image, along both axes. Precondition: valid_focus_stack(stack).
+constexpr std::uint64_t samples_per_correlation(const FocusStack& stack) noexcept {
+  const ImageView& model = stack.images[0];
+  return std::uint64_t{(model.width + stack.step - 1) / stack.step} * ((model.height + stack.step - 1) / stack.step);
+}
+
 // The normalised cross-correlation of stack image `depth` with the frame at
 // `pose` (its depth ignored), as sign(r) r^2 (ordered like r, no square
 // root), exact integer sums then float: the same bits on every target.
