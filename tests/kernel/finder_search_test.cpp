@@ -111,5 +111,40 @@ TEST(FinderSearch, ASurveySpreadOverFramesSeesTheLookalike) {
   EXPECT_EQ(spread.lookalike_distance_squared(), 0.0f);
 }
 
+// A candidate whose first vote verifies far below min_score is not voted
+// again: converging raises a score by little (finder_search.cpp,
+// kConvergeFloor), and during an occlusion every candidate is clutter.
+// Without the floor, which candidates converge does not depend on
+// min_score, and the two searches below cost the same.
+TEST(FinderSearch, CandidatesHopelesslyBelowTheMinimumScoreAreNotConverged) {
+  Finding t;
+  auto& [rig, finder, options, buffers, fine] = t;
+  app::GrayImage clutter(kSide, kSide);
+  std::uint32_t state = 12345;
+  for (std::uint8_t& p : clutter.pixels) {
+    state = state * 1664525u + 1013904223u;
+    p = (state >> 24) < 3 ? 255 : 0;  // 1.2% of the pixels lit: no model anywhere
+  }
+  const auto search_work = [&](float min_score, std::uint32_t& found) {
+    FinderOptions o = options;
+    o.min_score = min_score;
+    FinderSearch search(finder);
+    EXPECT_EQ(search.begin(kSide, kSide, o, buffers.scratch(fine.view())), Status::kOk);
+    EXPECT_EQ(search.advance(clutter.view(), buffers.scratch(fine.view()), kUnlimitedWork), Status::kOk);
+    EXPECT_TRUE(search.done());
+    std::vector<Detection> out(o.max_count);
+    found = 99;
+    EXPECT_EQ(search.results(buffers.scratch(fine.view()), out, found), Status::kOk);
+    return search.total_work();
+  };
+  std::uint32_t found_strict = 0, found_lax = 0;
+  const std::uint64_t strict = search_work(options.min_score, found_strict);
+  const std::uint64_t lax = search_work(0.01f, found_lax);
+  EXPECT_EQ(found_strict, 0u);
+  EXPECT_GT(found_lax, 0u);  // clutter scores above 0.01: candidates were there to converge
+  // At least one fine vote fewer (a vote's extraction alone is over 10000 units here).
+  EXPECT_LT(strict + 10000, lax);
+}
+
 }  // namespace
 }  // namespace gabarit
