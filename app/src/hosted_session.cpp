@@ -92,7 +92,10 @@ void HostedSession::fit_frame(std::uint32_t width, std::uint32_t height) {
   }
   if (profile_.recovery == RecoveryKind::kParticles && !particles_) {
     // Its edge map is the first frame's size.
-    particles_ = std::make_unique<ParticleTracker>(table_, width, height, particle_run_options(profile_));
+    // ParticleRecovery drives an EdgeParticleFilter: the edge measure.
+    ParticleRunOptions po = particle_run_options(profile_);
+    po.measure = ParticleMeasureKind::kEdges;
+    particles_ = std::make_unique<ParticleTracker>(table_, width, height, po);
     particles_->start(start_pose_);
     particle_recovery_.emplace(table_, detector_, particles_->edge_filter());
     session_->use_particle_recovery(&*particle_recovery_);

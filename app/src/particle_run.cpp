@@ -10,7 +10,18 @@
 namespace gabarit::app {
 
 const char* name_of(ParticleMeasureKind kind) noexcept {
-  return kind == ParticleMeasureKind::kEdges ? "edges" : "stencil";
+  switch (kind) {
+    case ParticleMeasureKind::kAuto: return "auto";
+    case ParticleMeasureKind::kEdges: return "edges";
+    case ParticleMeasureKind::kStencil: return "stencil";
+    case ParticleMeasureKind::kIntensity: return "intensity";
+  }
+  return "?";
+}
+
+ParticleMeasureKind resolved_measure(ParticleMeasureKind kind, const TableView& table) noexcept {
+  if (kind != ParticleMeasureKind::kAuto) return kind;
+  return table.has_model_images() ? ParticleMeasureKind::kIntensity : ParticleMeasureKind::kEdges;
 }
 
 ParticleRunOptions particle_run_options(const SessionProfile& profile) {
@@ -25,9 +36,14 @@ ParticleRunOptions particle_run_options(const SessionProfile& profile) {
 
 struct ParticleTracker::Parts {
   using StencilFilter = ParticleFilter<StencilVoteMeasure, EdgeCorrelationMeasure, EdgeMapLoader>;
+  using IntensityFilter = ParticleFilter<IntensityCorrelationMeasure>;
+  static ParticleRunOptions resolved(ParticleRunOptions o, const TableView& t) {
+    o.measure = resolved_measure(o.measure, t);
+    return o;
+  }
   Parts(const TableView& t, std::uint32_t w, std::uint32_t h, const ParticleRunOptions& o)
       : table(t),
-        options(o),
+        options(resolved(o, t)),
         detector(o.detector ? *o.detector : detector_of(t)),
         bits(edge_map_words(w, h)),
         features(std::size_t{w} * 16),  // strips of 16 rows
@@ -36,12 +52,19 @@ struct ParticleTracker::Parts {
         fine(t, loader, 1, o.edge_tolerance),
         buffers(t, o.voter),
         stencil(t, detector, buffers.scratch()),
+        table_stack(t),
         cloud(o.particles),
         next(o.particles),
         order(particle_scratch_order(o.particles)) {
     EdgeCorrelationMeasure* finer = o.finer ? &fine : nullptr;
-    if (o.measure == ParticleMeasureKind::kEdges) {
+    if (options.measure == ParticleMeasureKind::kEdges) {
       edge_filter.emplace(edges, finer, &loader);
+    } else if (options.measure == ParticleMeasureKind::kIntensity) {
+      // ParticleTracker refuses a table without images before this.
+      intensity.emplace(*table_stack.get(), o.intensity_samples);
+      intensity_fine.emplace(*table_stack.get(), 0);
+      intensity_filter.emplace(*intensity, o.finer ? &*intensity_fine : nullptr);
+      options.filter.sharpness = kIntensitySharpness;
     } else {
       // The edge map only where a measure reads it: the stencil measure alone needs none.
       stencil_filter.emplace(stencil, finer, o.finer ? &loader : nullptr);
@@ -49,6 +72,7 @@ struct ParticleTracker::Parts {
   }
   ParticleFilterCore& core() {
     if (edge_filter) return *edge_filter;
+    if (intensity_filter) return *intensity_filter;
     return *stencil_filter;
   }
   const TableView& table;
@@ -60,10 +84,13 @@ struct ParticleTracker::Parts {
   EdgeCorrelationMeasure edges, fine;
   app::TrackerBuffers buffers;
   StencilVoteMeasure stencil;
+  TableFocusStack table_stack;
+  std::optional<IntensityCorrelationMeasure> intensity, intensity_fine;
   std::vector<Particle> cloud, next;
   std::vector<std::uint32_t> order;
   std::optional<EdgeParticleFilter> edge_filter;
   std::optional<StencilFilter> stencil_filter;
+  std::optional<IntensityFilter> intensity_filter;
 };
 
 ParticleTracker::ParticleTracker(const TableView& table, std::uint32_t max_width, std::uint32_t max_height,
@@ -73,6 +100,8 @@ ParticleTracker::ParticleTracker(const TableView& table, std::uint32_t max_width
   if (max_width < 1 || max_height < 1 || max_width > 65535 || max_height > 65535)
     throw app::Error("particle filter: frames must be 1..65535 pixels on a side");
   if (!valid(options.filter)) throw app::Error("particle filter: invalid options");
+  if (resolved_measure(options.measure, table) == ParticleMeasureKind::kIntensity && !table.has_model_images())
+    throw app::Error("particle filter: the intensity measure needs a table with model images (tables build from images stores them)");
   parts_ = std::make_unique<Parts>(table, max_width, max_height, options);
 }
 ParticleTracker::~ParticleTracker() = default;
@@ -92,7 +121,9 @@ void ParticleTracker::start(const Pose& initial) {
 
 ParticleEstimate ParticleTracker::step(const app::GrayImage& frame) {
   ParticleEstimate e;
-  const Status s = parts_->edge_filter ? parts_->edge_filter->step(frame.view(), e) : parts_->stencil_filter->step(frame.view(), e);
+  const Status s = parts_->edge_filter        ? parts_->edge_filter->step(frame.view(), e)
+                   : parts_->intensity_filter ? parts_->intensity_filter->step(frame.view(), e)
+                                              : parts_->stencil_filter->step(frame.view(), e);
   if (s != Status::kOk) throw app::Error(std::string("particle filter: step failed: ") + status_name(s));
   return e;
 }

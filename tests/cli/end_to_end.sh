@@ -155,12 +155,30 @@ cmp -s "$s/pa.csv" "$s/pb.csv" || fail "the particle filter: the same seed gave 
 $g track --tracker particle --seed 2 --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init" -o "$s/pc.csv" 2>/dev/null || fail "--seed 2"
 cmp -s "$s/pa.csv" "$s/pc.csv" && fail "the particle filter: another seed gave the same poses"
 [ "$(wc -l < "$s/pa.csv")" = 41 ] || fail "the particle filter: one row per frame expected"
+# Its default measure is the verified score where the table has model
+# images; the edge measure stays an option, and the default without images.
+$g track --tracker particle --measure edges --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init" -o "$s/pe.csv" 2>/dev/null \
+  || fail "track --tracker particle --measure edges"
+cmp -s "$s/pa.csv" "$s/pe.csv" && fail "the particle filter: --measure edges gave the default's poses (the intensity measure's)"
+# Both hold the microscope scene: the edge measure within 2 px on 80% of
+# its frames, the intensity measure (its likelihood broader, its mean less
+# sharp on this small scene) within 5 px on every one.
+$g eval --gt "$s/gt.csv" --poses "$s/pe.csv" > "$s/acc_pe.json" || fail "eval the particle filter (edges)"
 $g eval --gt "$s/gt.csv" --poses "$s/pa.csv" > "$s/acc_pf.json" || fail "eval the particle filter"
-python3 - "$s/acc_pf.json" <<'PY' || fail "the particle filter lost the microscope scene: $(cat "$s/acc_pf.json")"
+python3 - "$s/acc_pe.json" "$s/acc_pf.json" <<'PY' || fail "the particle filter lost the microscope scene: $(cat "$s/acc_pe.json" "$s/acc_pf.json")"
 import json, sys
-a = json.load(open(sys.argv[1]))
-sys.exit(0 if a["within_2px"] >= 0.8 * a["frames"] else 1)
+e, i = (json.load(open(p)) for p in sys.argv[1:3])
+sys.exit(0 if e["within_2px"] >= 0.8 * e["frames"] and i["within_5px"] == i["frames"] else 1)
 PY
+$g track --tracker particle --measure intensity --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init" -o "$s/pi.csv" 2>/dev/null \
+  || fail "track --tracker particle --measure intensity"
+cmp -s "$s/pa.csv" "$s/pi.csv" || fail "the particle filter: the default measure is not the intensity measure on a table with images"
+$g track --tracker particle --table "$s/t10.gbt" --frames "$s/frames.y4m" --init "$init" -o "$s/p10e.csv" 2>/dev/null \
+  || fail "track --tracker particle on a table without images"
+$g track --tracker particle --measure edges --table "$s/t10.gbt" --frames "$s/frames.y4m" --init "$init" -o "$s/p10f.csv" 2>/dev/null \
+  || fail "track --tracker particle --measure edges on a table without images"
+cmp -s "$s/p10e.csv" "$s/p10f.csv" || fail "the particle filter: without images the default measure is not the edge measure"
+expect 1 "needs a table with model images" $g track --tracker particle --measure intensity --table "$s/t10.gbt" --frames "$s/frames.y4m" --init "$init"
 $g track --tracker particle --measure stencil --without all --particles 200 --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init" \
   -o "$s/ps.csv" 2>/dev/null || fail "track --tracker particle --measure stencil --without all"
 $g track --recovery particle --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init" -o "$s/pr.csv" 2>/dev/null || fail "track --recovery particle"
@@ -212,7 +230,7 @@ expect 2 "applies to --tracker particle and --recovery particle" $g track --tabl
 expect 2 "applies to --tracker particle" $g track --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init" --measure edges
 expect 2 "not --tracker particle" $g track --tracker particle --plain --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init"
 expect 2 "want stencil or particle" $g track --tracker kalman --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init"
-expect 2 "want edges or stencil" $g track --tracker particle --measure votes --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init"
+expect 2 "want intensity, edges or stencil" $g track --tracker particle --measure votes --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init"
 expect 2 "is none of" $g track --tracker particle --without speed --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init"
 expect 2 "--particles" $g track --tracker particle --particles 0 --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init"
 expect 1 "the focus stack has 1 images; the table has 2 depths" $g track --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init" \

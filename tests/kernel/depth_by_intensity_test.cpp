@@ -2,6 +2,7 @@
 // the frame, at the pose (rotated about the reference point), is the one
 // chosen; bad arguments are refused and leave the depth alone.
 #include "gabarit/depth_by_intensity.hpp"
+#include "gabarit/particle_measures.hpp"
 #include "gabarit/verification.hpp"
 
 #include <gtest/gtest.h>
@@ -367,6 +368,61 @@ TEST(Verification, EveryProposalOfAFrameIsScoredOverTheSameSamples) {
     ASSERT_TRUE(v.found);
     EXPECT_EQ(v.pose.x, truth.x) << "truth first: " << truth_first;
   }
+}
+
+// The particle filter's intensity measure (particle_measures.hpp): the
+// verified score on a list of the model's samples made once. A textured disc
+// on a flat grey over clutter: the list holds only the disc and its ring (at
+// most the samples asked for), the true pose scores as correlation_at does
+// on every sample at the list's step, poses off it score less; a pose
+// outside the frame or at a missing depth scores 0; with 0 samples the
+// measure is correlation_at itself.
+TEST(IntensityCorrelationMeasure, ScoresTheListedOutlineAsTheVerifiedScoreDoes) {
+  const GrayImage disc = textured_disc(128.0f, 1.0f);
+  GrayImage f(120, 100);
+  std::uint32_t state = 99u;
+  for (std::uint8_t& p : f.pixels) {
+    state = state * 1664525u + 1013904223u;
+    p = static_cast<std::uint8_t>(state >> 24);
+  }
+  paste_disc(f, disc);
+  const std::vector<GrayImage> images{disc};
+  const Views views(images);
+  const FocusStack stack{views.views, 20.0f, 20.0f, 1};
+  const Pose truth{60.0f, 48.0f, 0.0f, 0};
+  IntensityCorrelationMeasure sparse(stack, 64), every(stack, 0);
+  EXPECT_LE(sparse.samples(), 64u);
+  EXPECT_GE(sparse.samples(), 16u);
+  EXPECT_GE(sparse.step(), 2u);  // the disc and its ring hold about 490 pixels
+  EXPECT_EQ(every.samples(), 0u);
+  EXPECT_EQ(every.step(), 1u);
+  EXPECT_EQ(sparse.prepare(GrayImage(0, 0).view(), truth), Status::kInvalidArgument);
+  ASSERT_EQ(sparse.prepare(f.view(), truth), Status::kOk);
+  ASSERT_EQ(every.prepare(f.view(), truth), Status::kOk);
+  const float at_truth = sparse.score(truth);
+  EXPECT_GT(at_truth, 0.8f);
+  EXPECT_LE(at_truth, 1.0f);
+  for (const Pose& off : {Pose{62.0f, 48.0f, 0.0f, 0}, Pose{60.0f, 45.5f, 0.0f, 0}, Pose{60.0f, 48.0f, 20.0f, 0}})
+    EXPECT_LT(sparse.score(off), at_truth - 0.2f) << off.x << "," << off.y << "," << off.theta_deg;
+  std::vector<Particle> cloud{{truth, 0.0f}, {Pose{61.0f, 48.0f, 0.0f, 0}, 0.0f}, {Pose{500.0f, 48.0f, 0.0f, 0}, 0.0f},
+                              {Pose{60.0f, 48.0f, 0.0f, 1}, 0.0f}};
+  sparse.weigh(cloud);
+  EXPECT_EQ(cloud[0].weight, at_truth);
+  EXPECT_GT(cloud[1].weight, 0.0f);
+  EXPECT_EQ(cloud[2].weight, 0.0f);  // outside the frame
+  EXPECT_EQ(cloud[3].weight, 0.0f);  // no such depth
+  // Every sample: correlation_at's score, the ring as at the prediction.
+  float r2 = 0.0f;
+  bool ring = false;
+  ASSERT_TRUE(correlation_at(f.view(), truth, stack, 0, OutlineRing::kWhereItAgrees, r2, ring));
+  const float r = correlation_from_signed_square(r2);
+  EXPECT_EQ(every.score(truth), r > 0.0f ? r : 0.0f);
+  // The listed samples are the outline's at the list's step: the same sums
+  // as correlation_at over the grid of that step (only the positions'
+  // arithmetic differs, by at most a 1/65536 pixel).
+  const FocusStack at_step{views.views, 20.0f, 20.0f, sparse.step()};
+  ASSERT_TRUE(correlation_at(f.view(), truth, at_step, 0, OutlineRing::kWhereItAgrees, r2, ring));
+  EXPECT_NEAR(at_truth, correlation_from_signed_square(r2), 1.0e-3f);
 }
 
 }  // namespace

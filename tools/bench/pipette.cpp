@@ -47,6 +47,7 @@ const Method kMethods[] = {
     {"Canny, motion model (default session)", true, true, false, {}},
     {"particle filter, edge measure (Canny)", true, false, true, app::ParticleMeasureKind::kEdges},
     {"particle filter, stencil measure (Canny table)", true, false, true, app::ParticleMeasureKind::kStencil},
+    {"particle filter, intensity measure (the verified score)", true, false, true, app::ParticleMeasureKind::kIntensity},
     {"Canny, motion model, particle re-acquisition", true, true, false, {}, true},
 };
 constexpr std::size_t kMethodCount = sizeof kMethods / sizeof kMethods[0];
@@ -135,6 +136,15 @@ std::string measure_costs(const TableView& table, const app::GrayImage& frame, c
     if (stencil.prepare(frame.view(), truth) != Status::kOk) throw app::Error("pipette: vote failed");
   });
   const double stencil_us = best_of([&] { stencil.weigh(cloud); });
+  const app::TableFocusStack stack(table);
+  if (stack.get() == nullptr) throw app::Error("pipette: the Canny table has no model images");
+  IntensityCorrelationMeasure intensity(*stack.get(), kIntensityMeasureSamples), intensity_fine(*stack.get(), 0);
+  const double intensity_prepare_us = best_of([&] {
+    if (intensity.prepare(frame.view(), truth) != Status::kOk) throw app::Error("pipette: intensity measure failed");
+  });
+  const double intensity_us = best_of([&] { intensity.weigh(cloud); });
+  if (intensity_fine.prepare(frame.view(), truth) != Status::kOk) throw app::Error("pipette: intensity measure failed");
+  const double intensity_fine_us = best_of([&] { intensity_fine.weigh(cloud); });
   const double n = particles;
   std::ostringstream md;
   md << "## What each measure costs\n\nOne frame of scene 0, " << particles
@@ -146,7 +156,12 @@ std::string measure_costs(const TableView& table, const app::GrayImage& frame, c
      << "| edge correlation, every model point (the finer measure) | (the same map) | " << fmt(1000 * fine_us / n) << " | "
      << fmt(fine_us) << " |\n"
      << "| stencil vote of the particle's cell | one vote " << fmt(vote_us) << " (" << table.cell_count() << " cells) | "
-     << fmt(1000 * stencil_us / n) << " | " << fmt(stencil_us) << " |\n\n";
+     << fmt(1000 * stencil_us / n) << " | " << fmt(stencil_us) << " |\n"
+     << "| intensity (the verified score), the model image every " << intensity.step() << " px (" << intensity.samples()
+     << " samples on the pipette and its ring) | the ring's choice " << fmt(intensity_prepare_us) << " | " << fmt(1000 * intensity_us / n) << " | " << fmt(intensity_us)
+     << " |\n"
+     << "| intensity, every " << stack.get()->step << " px of the model image (the finer measure) | (the same) | " << fmt(1000 * intensity_fine_us / n)
+     << " | " << fmt(intensity_fine_us) << " |\n\n";
   return md.str();
 }
 
@@ -210,7 +225,7 @@ int run_pipette(const PipetteOptions& o) {
         app::ParticleRunOptions po;
         po.particles = o.particles;
         po.measure = method.measure;
-        po.finer = method.measure == app::ParticleMeasureKind::kEdges;  // as gabarit track --measure stencil
+        po.finer = method.measure != app::ParticleMeasureKind::kStencil;  // as gabarit track --measure stencil
         app::run_particle_tracking(table, src, init, po, on_row);
       } else {
         host::TrackingOptions to;

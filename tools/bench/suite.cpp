@@ -72,7 +72,8 @@ struct SceneResult {
 constexpr const char* kPlain = "plain loop (thesis)";
 constexpr const char* kSession = "gabarit default session";
 constexpr const char* kNcc = "OpenCV NCC bank";
-constexpr const char* kParticle = "particle filter (edges, 1000 particles)";
+// No commas in a method name: the CSV does not quote its fields.
+constexpr const char* kParticle = "particle filter (1000 particles; its default measure: intensity)";
 constexpr const char* kSessionParticles = "default session with particle re-acquisition";
 constexpr const char* kSessionDetection = "default session with re-acquisition by detection";
 

@@ -41,8 +41,11 @@ app::Args declare_track() {
                                            "                          cross-correlation) at the tracked pose"},
       {"--tracker", "stencil|particle", "stencil (default): the stencil session; particle: the thesis's\n"
                                         "                          particle filter (chapter 3, docs/particle-filter.md) with the table's model"},
-      {"--measure", "edges|stencil", "--tracker particle: edge correlation over the table's model points\n"
-                                     "                          (default), or the stencil vote of each particle's cell"},
+      {"--measure", "intensity|edges|stencil", "--tracker particle: the session's verified score (the model image's\n"
+                                               "                          correlation with the frame on about 256 of its samples; the default\n"
+                                               "                          for a table with model images), edge correlation over the table's\n"
+                                               "                          model points (the default without), or the stencil vote of each\n"
+                                               "                          particle's cell"},
       {"-o", "POSES.csv", "pose output (default stdout)"},
       {"--stats", "STATS.json", "per-frame timing and vote statistics"}};
   for (app::Option& o : app::session_option_group()) options.push_back(std::move(o));
@@ -130,11 +133,15 @@ app::ParticleRunOptions read_particle_tracker(const app::Args& args) {
   app::ParticleRunOptions po = app::particle_run_options(app::read_session_profile(args));
   if (args.has("--binary")) po.detector = Detector{table_format::DetectorKind::kBinary, 0};
   po.voter = app::parse_voter(args.get_or("--voter", "auto"), "--voter");
-  if (const std::string m = args.get_or("--measure", "edges"); m == "stencil") {
+  if (const std::string m = args.get_or("--measure", "auto"); m == "stencil") {
     po.measure = app::ParticleMeasureKind::kStencil;
     po.finer = false;  // one vote per frame and no edge map: modes ranked by weight, confidence from the vote
-  } else if (m != "edges") {
-    throw app::UsageError("--measure '" + m + "': want edges or stencil");
+  } else if (m == "intensity") {
+    po.measure = app::ParticleMeasureKind::kIntensity;  // its finer measure: the same correlation on every sample
+  } else if (m == "edges") {
+    po.measure = app::ParticleMeasureKind::kEdges;
+  } else if (m != "auto") {
+    throw app::UsageError("--measure '" + m + "': want intensity, edges or stencil");
   }
   return po;
 }

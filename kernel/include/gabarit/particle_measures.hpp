@@ -18,6 +18,17 @@
 //    that contains its motion from the prediction (its stencil's share of
 //    features), 0 outside the table's range. Cost per particle: one cell
 //    lookup; per frame: one vote.
+//  - IntensityCorrelationMeasure: the session's verified score
+//    (verification.hpp) as the likelihood: the correlation r of the focus
+//    stack's image of the particle's depth with the frame at its pose (over
+//    the object's outline, as correlation_at compares), on a sparse, fixed
+//    subset of the model's samples: every step-th pixel, the step chosen
+//    once so that about `samples` fall on the object and its ring. The
+//    weight is max(r, 0). The outline's ring is compared or left out for
+//    every particle of a frame as it is at the prediction (OutlineRing), so
+//    that all are scored over the same samples. It reads the frame itself
+//    (no loader). Cost per particle: about `samples` bilinear samples (the
+//    list is made once, so the surround's pixels cost nothing).
 // No heap: the bitmap, the features and the counters come from the caller.
 #pragma once
 
@@ -25,6 +36,7 @@
 #include <cstdint>
 #include <span>
 
+#include "gabarit/depth_by_intensity.hpp"
 #include "gabarit/particle_filter.hpp"
 #include "gabarit/table_view.hpp"
 #include "gabarit/tracker.hpp"
@@ -120,6 +132,56 @@ class StencilVoteMeasure {
   Pose predicted_;
   SinCos rotation_;
   bool prepared_ = false;
+};
+
+// The sparse subset's default size: about 256 samples on the object and its
+// ring (docs/particle-filter.md, "The intensity measure"), and its largest.
+inline constexpr std::uint32_t kIntensityMeasureSamples = 256;
+inline constexpr std::uint32_t kMaxIntensityMeasureSamples = 1024;
+// The weights' power (ParticleFilterOptions::sharpness) with this measure:
+// a correlation falls off more slowly around the true pose than the edge
+// measure's fraction, so the default 8 left the cloud wide and its mean
+// off the tip. On the pipette scenes' tuning half (bench --pipette, tip
+// within 6 px): 8: 30.9%, 12: 35.4%, 16: 51.4%, 24: 47.2%, 32: 40.9%.
+inline constexpr std::uint32_t kIntensitySharpness = 16;
+
+class IntensityCorrelationMeasure {
+ public:
+  // `stack` (its images must outlive the measure) is the table's focus
+  // stack. samples 16..kMaxIntensityMeasureSamples: the model's pixels every
+  // step-th row and column (step at least the stack's own) that lie on the
+  // object or its ring, step the smallest that keeps them within `samples`,
+  // listed once here. 0: every sample at the stack's own step, exactly
+  // correlation_at (the session's verified score; its cost grows with the
+  // model's area, not the list's).
+  IntensityCorrelationMeasure(const FocusStack& stack, std::uint32_t samples) noexcept;
+  // Keeps the frame (it must outlive the frame's weighing) and decides the
+  // ring at the prediction. kInvalidArgument for an invalid frame or stack.
+  [[nodiscard]] Status prepare(const ImageView& image, const Pose& predicted) noexcept;
+  void weigh(std::span<Particle> particles) noexcept;
+  // 0 outside pose_in_range, at a depth the stack lacks, or where fewer
+  // than 16 samples fall inside the frame.
+  float score(const Pose& pose) noexcept;
+  std::uint32_t reach_px() const noexcept { return 0; }
+  std::uint32_t step() const noexcept { return stack_.step; }
+  // The listed samples (0 for every sample), and how many lie on the object.
+  std::uint32_t samples() const noexcept { return count_; }
+
+ private:
+  struct Sample {
+    std::uint16_t u = 0, v = 0;  // model pixel
+    bool object = false;         // on the object (else on its ring)
+  };
+  // The correlation over the list: false where fewer than 16 samples fall
+  // in the frame or a side is flat; `ring_compared` as correlation_at's.
+  bool listed_correlation(const Pose& pose, OutlineRing ring, float& signed_r2, bool& ring_compared) const noexcept;
+  bool correlate(const Pose& pose, OutlineRing ring, float& signed_r2, bool& ring_compared) const noexcept;
+  FocusStack stack_;
+  ImageView frame_{};
+  OutlineRing ring_ = OutlineRing::kWhereItAgrees;
+  std::uint8_t surround_ = 0;
+  std::uint32_t count_ = 0;
+  Sample list_[kMaxIntensityMeasureSamples];
 };
 
 }  // namespace gabarit
