@@ -194,6 +194,17 @@ void paste_disc(GrayImage& f, const GrayImage& disc) {
       if (disc.at(u, v) != 128) f.at(40 + u, 28 + v) = disc.at(u, v);
 }
 
+// A 120 x 100 frame of uniform random grey levels (a linear congruential generator).
+GrayImage clutter(std::uint32_t seed) {
+  GrayImage f(120, 100);
+  std::uint32_t state = seed;
+  for (std::uint8_t& p : f.pixels) {
+    state = state * 1664525u + 1013904223u;
+    p = static_cast<std::uint8_t>(state >> 24);
+  }
+  return f;
+}
+
 // A textured disc drawn on a flat grey, pasted over clutter: scoring a pose,
 // the model's flat surround is not compared with the clutter behind it (the
 // disc and a one-pixel ring around it are), so the true pose correlates as
@@ -204,12 +215,7 @@ TEST(CorrelationAt, AModelOnAFlatSurroundIsComparedOverItsOutlineNotTheClutter) 
   const GrayImage disc = textured_disc(128.0f, 1.0f);
   GrayImage cropped = disc;  // its border one grey level off in places
   for (std::uint32_t u = 0; u < 41; u += 2) cropped.at(u, 0) = 129;
-  GrayImage f(120, 100);
-  std::uint32_t state = 12345u;
-  for (std::uint8_t& p : f.pixels) {
-    state = state * 1664525u + 1013904223u;
-    p = static_cast<std::uint8_t>(state >> 24);
-  }
+  GrayImage f = clutter(12345u);
   paste_disc(f, disc);
   const Pose truth{60.0f, 48.0f, 0.0f, 0};
   const std::vector<GrayImage> flat{disc}, not_flat{cropped};
@@ -379,12 +385,7 @@ TEST(Verification, EveryProposalOfAFrameIsScoredOverTheSameSamples) {
 // measure is correlation_at itself.
 TEST(IntensityCorrelationMeasure, ScoresTheListedOutlineAsTheVerifiedScoreDoes) {
   const GrayImage disc = textured_disc(128.0f, 1.0f);
-  GrayImage f(120, 100);
-  std::uint32_t state = 99u;
-  for (std::uint8_t& p : f.pixels) {
-    state = state * 1664525u + 1013904223u;
-    p = static_cast<std::uint8_t>(state >> 24);
-  }
+  GrayImage f = clutter(99u);
   paste_disc(f, disc);
   const std::vector<GrayImage> images{disc};
   const Views views(images);
