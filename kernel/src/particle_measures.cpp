@@ -192,7 +192,7 @@ IntensityCorrelationMeasure::IntensityCorrelationMeasure(const FocusStack& stack
   // stack's) that keeps `want` or fewer. The pixels with the most structure
   // instead (the strongest gradients) made the likelihood as narrow as the
   // edges are, and on the pipette scenes the cloud lost the tip twice as
-  // often (docs/particle-filter.md, "The intensity measure").
+  // often (docs/particle-filter.md, "The measures").
   std::uint32_t step = stack.step;
   for (;; ++step) {
     std::uint32_t n = 0;

@@ -135,7 +135,7 @@ class StencilVoteMeasure {
 };
 
 // The sparse subset's default size: about 256 samples on the object and its
-// ring (docs/particle-filter.md, "The intensity measure"), and its largest.
+// ring (docs/particle-filter.md, "The measures"), and its largest.
 inline constexpr std::uint32_t kIntensityMeasureSamples = 256;
 inline constexpr std::uint32_t kMaxIntensityMeasureSamples = 1024;
 // The weights' power (ParticleFilterOptions::sharpness) with this measure:

@@ -25,7 +25,7 @@ enum class ParticleMeasureKind : std::uint8_t {
   // The default: kIntensity for a table with model images, else kEdges (on
   // the pipette scenes the intensity measure held the tip within 6 px on
   // 57.9% of the held-out frames against 36.5%, in two thirds of the time;
-  // docs/particle-filter.md, "The intensity measure").
+  // docs/particle-filter.md, "The measures").
   kAuto,
   kEdges,    // edge correlation (thesis 3.4.3): every edge_stride-th model point, within edge_tolerance px of an edge
   kStencil,  // the stencil vote of the particle's cell (the table voted once per frame at the prediction)
