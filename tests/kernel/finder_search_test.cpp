@@ -117,8 +117,7 @@ TEST(FinderSearch, ASurveySpreadOverFramesSeesTheLookalike) {
 // Without the floor, which candidates converge does not depend on
 // min_score, and the two searches below cost the same.
 TEST(FinderSearch, CandidatesHopelesslyBelowTheMinimumScoreAreNotConverged) {
-  Finding t;
-  auto& [rig, finder, options, buffers, fine] = t;
+  Finding t;  // no structured bindings: the lambda below captures (clang 14 refuses bindings there)
   app::GrayImage clutter(kSide, kSide);
   std::uint32_t state = 12345;
   for (std::uint8_t& p : clutter.pixels) {
@@ -126,19 +125,19 @@ TEST(FinderSearch, CandidatesHopelesslyBelowTheMinimumScoreAreNotConverged) {
     p = (state >> 24) < 3 ? 255 : 0;  // 1.2% of the pixels lit: no model anywhere
   }
   const auto search_work = [&](float min_score, std::uint32_t& found) {
-    FinderOptions o = options;
+    FinderOptions o = t.options;
     o.min_score = min_score;
-    FinderSearch search(finder);
-    EXPECT_EQ(search.begin(kSide, kSide, o, buffers.scratch(fine.view())), Status::kOk);
-    EXPECT_EQ(search.advance(clutter.view(), buffers.scratch(fine.view()), kUnlimitedWork), Status::kOk);
+    FinderSearch search(t.finder);
+    EXPECT_EQ(search.begin(kSide, kSide, o, t.buffers.scratch(t.fine.view())), Status::kOk);
+    EXPECT_EQ(search.advance(clutter.view(), t.buffers.scratch(t.fine.view()), kUnlimitedWork), Status::kOk);
     EXPECT_TRUE(search.done());
     std::vector<Detection> out(o.max_count);
     found = 99;
-    EXPECT_EQ(search.results(buffers.scratch(fine.view()), out, found), Status::kOk);
+    EXPECT_EQ(search.results(t.buffers.scratch(t.fine.view()), out, found), Status::kOk);
     return search.total_work();
   };
   std::uint32_t found_strict = 0, found_lax = 0;
-  const std::uint64_t strict = search_work(options.min_score, found_strict);
+  const std::uint64_t strict = search_work(t.options.min_score, found_strict);
   const std::uint64_t lax = search_work(0.01f, found_lax);
   EXPECT_EQ(found_strict, 0u);
   EXPECT_GT(found_lax, 0u);  // clutter scores above 0.01: candidates were there to converge

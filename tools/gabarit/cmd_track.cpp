@@ -42,7 +42,7 @@ app::Args declare_track() {
       {"--tracker", "stencil|particle", "stencil (default): the stencil session; particle: the thesis's\n"
                                         "                          particle filter (chapter 3, docs/particle-filter.md) with the table's model"},
       {"--measure", "intensity|edges|stencil", "--tracker particle: the session's verified score (the model image's\n"
-                                               "                          correlation with the frame on about 256 of its samples; the default\n"
+                                               "                          correlation with the frame on at most 256 of its samples; the default\n"
                                                "                          for a table with model images), edge correlation over the table's\n"
                                                "                          model points (the default without), or the stencil vote of each\n"
                                                "                          particle's cell"},
