@@ -196,7 +196,7 @@ Status angle_by_intensity(const ImageView& frame, const Pose& pose, const FocusS
     float score = 0.0f;
     bool ring_compared = false;
     if (!correlation(frame, m, p, stack, ring, score, ring_compared)) return Status::kOk;  // leaving the frame: keep the angle
-    if (ring == OutlineRing::kWhereItAgrees) ring = ring_compared ? OutlineRing::kCompared : OutlineRing::kLeftOut;
+    if (ring == OutlineRing::kWhereItAgrees) ring = ring_as_found(ring_compared);
     scores[k + kAngleSteps] = score;
     if (best < 0 || score > scores[best]) best = k + kAngleSteps;
   }

@@ -253,7 +253,7 @@ Status IntensityCorrelationMeasure::prepare(const ImageView& image, const Pose& 
     return Status::kOk;
   float r2 = 0.0f;
   bool ring_compared = false;
-  if (correlate(predicted, OutlineRing::kWhereItAgrees, r2, ring_compared) && ring_compared) ring_ = OutlineRing::kCompared;
+  if (correlate(predicted, OutlineRing::kWhereItAgrees, r2, ring_compared)) ring_ = ring_as_found(ring_compared);
   return Status::kOk;
 }
 

@@ -230,7 +230,7 @@ Status verify(const ImageView& frame, const FocusStack& stack, const Proposals& 
   for (std::uint32_t i = 0; i < proposals.count; ++i) {
     ++out.correlations;
     scored[i] = correlation_at(frame, proposals.poses[i], stack, proposals.poses[i].depth, ring, scores[i], ring_compared);
-    if (scored[i] && ring == OutlineRing::kWhereItAgrees) ring = ring_compared ? OutlineRing::kCompared : OutlineRing::kLeftOut;
+    if (scored[i] && ring == OutlineRing::kWhereItAgrees) ring = ring_as_found(ring_compared);
     if (scored[i] && (!out.found || scores[i] > scores[out.winner])) {
       out.found = true;
       out.winner = i;

@@ -90,6 +90,10 @@ constexpr std::uint64_t samples_per_correlation(const FocusStack& stack) noexcep
 // apart), and the best-scored pose is where the ring happened to be left
 // out, not where the model fits (docs/tracking.md, "Vote, then verify").
 enum class OutlineRing : std::uint8_t { kWhereItAgrees, kCompared, kLeftOut };
+// The choice a pose scored with kWhereItAgrees made, fixed for the others.
+constexpr OutlineRing ring_as_found(bool ring_compared) noexcept {
+  return ring_compared ? OutlineRing::kCompared : OutlineRing::kLeftOut;
+}
 // correlation_at with the ring as `ring` says; `ring_compared` tells whether
 // the ring was in the sums (false without a ring: a model with no flat
 // surround, or the fallback to every sample), so that a caller can fix
