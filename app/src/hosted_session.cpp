@@ -95,6 +95,7 @@ void HostedSession::fit_frame(std::uint32_t width, std::uint32_t height) {
     // ParticleRecovery drives an EdgeParticleFilter: the edge measure.
     ParticleRunOptions po = particle_run_options(profile_);
     po.measure = ParticleMeasureKind::kEdges;
+    po.proposals = 0;  // ParticleRecovery votes the heaviest modes itself (docs/particle-filter.md, "Re-acquisition")
     particles_ = std::make_unique<ParticleTracker>(table_, width, height, po);
     particles_->start(start_pose_);
     particle_recovery_.emplace(table_, detector_, particles_->edge_filter());

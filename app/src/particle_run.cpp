@@ -36,7 +36,8 @@ ParticleRunOptions particle_run_options(const SessionProfile& profile) {
 
 struct ParticleTracker::Parts {
   using StencilFilter = ParticleFilter<StencilVoteMeasure, EdgeCorrelationMeasure, EdgeMapLoader>;
-  using IntensityFilter = ParticleFilter<IntensityCorrelationMeasure>;
+  using IntensityFilter = ParticleFilter<IntensityCorrelationMeasure, IntensityCorrelationMeasure, NoFrameLoader,
+                                         DefaultPropagation, KinematicCompensation, ModeAnalysis, StencilVoteProposer>;
   static ParticleRunOptions resolved(ParticleRunOptions o, const TableView& t) {
     o.measure = resolved_measure(o.measure, t);
     return o;
@@ -69,6 +70,13 @@ struct ParticleTracker::Parts {
       // The edge map only where a measure reads it: the stencil measure alone needs none.
       stencil_filter.emplace(stencil, finer, o.finer ? &loader : nullptr);
     }
+    // Vote-guided proposals where the measure is not the vote itself.
+    if (o.proposals > 0 && options.filter.proposal_fraction > 0.0f && (edge_filter || intensity_filter)) {
+      proposal_buffers.emplace(t, o.voter);
+      proposer.emplace(t, detector, proposal_buffers->scratch(), o.proposals);
+      if (edge_filter) edge_filter->propose_with(&*proposer);
+      if (intensity_filter) intensity_filter->propose_with(&*proposer);
+    }
   }
   ParticleFilterCore& core() {
     if (edge_filter) return *edge_filter;
@@ -84,6 +92,8 @@ struct ParticleTracker::Parts {
   EdgeCorrelationMeasure edges, fine;
   app::TrackerBuffers buffers;
   StencilVoteMeasure stencil;
+  std::optional<app::TrackerBuffers> proposal_buffers;  // the vote proposer's scratch, apart from the stencil measure's
+  std::optional<StencilVoteProposer> proposer;
   TableFocusStack table_stack;
   std::optional<IntensityCorrelationMeasure> intensity, intensity_fine;
   std::vector<Particle> cloud, next;
@@ -100,6 +110,8 @@ ParticleTracker::ParticleTracker(const TableView& table, std::uint32_t max_width
   if (max_width < 1 || max_height < 1 || max_width > 65535 || max_height > 65535)
     throw app::Error("particle filter: frames must be 1..65535 pixels on a side");
   if (!valid(options.filter)) throw app::Error("particle filter: invalid options");
+  if (options.proposals > kMaxParticleProposals)
+    throw app::Error("particle filter: at most " + std::to_string(kMaxParticleProposals) + " vote proposals");
   if (resolved_measure(options.measure, table) == ParticleMeasureKind::kIntensity && !table.has_model_images())
     throw app::Error("particle filter: the intensity measure needs a table with model images (tables build from images stores them)");
   parts_ = std::make_unique<Parts>(table, max_width, max_height, options);

@@ -14,6 +14,7 @@ ParticleFilterOptions particle_filter_options(std::uint32_t off) noexcept {
   if ((off & kImproveReinit) != 0) o.partial_reinit = false;
   if ((off & kImproveModeFilter) != 0) o.mode_filter = false;
   if ((off & kImproveVelocity) != 0) o.constant_velocity = false;
+  if ((off & kImproveProposals) != 0) o.proposal_fraction = 0.0f;
   return o;
 }
 

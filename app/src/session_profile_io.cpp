@@ -19,7 +19,7 @@ struct ImprovementName {
 constexpr ImprovementName kImprovementNames[] = {
     {"modes", kImproveModes},         {"disambiguation", kImproveDisambiguation}, {"narrowing", kImproveNarrowing},
     {"kinematics", kImproveKinematics}, {"reinit", kImproveReinit},               {"mode-filter", kImproveModeFilter},
-    {"velocity", kImproveVelocity},   {"all", kAllImprovements}};
+    {"velocity", kImproveVelocity},   {"proposals", kImproveProposals},           {"all", kAllImprovements}};
 
 const char* recovery_name(RecoveryKind kind) {
   switch (kind) {
@@ -177,7 +177,7 @@ std::uint32_t parse_improvements_off(const std::string& list, const std::string&
     const auto* it = std::find_if(std::begin(kImprovementNames), std::end(kImprovementNames),
                                   [&](const ImprovementName& n) { return word == n.word; });
     if (it == std::end(kImprovementNames))
-      throw UsageError(what + ": '" + word + "' is none of modes, disambiguation, narrowing, kinematics, reinit, mode-filter, velocity, all");
+      throw UsageError(what + ": '" + word + "' is none of modes, disambiguation, narrowing, kinematics, reinit, mode-filter, velocity, proposals, all");
     off |= it->bit;
     start = comma + 1;
   }
@@ -289,8 +289,9 @@ std::vector<Option> session_option_group() {
       {"--edge-tolerance", "PX", "the particle filter's edge measure: a point within PX pixels of an edge" + indent +
                                      "counts, 0..3 (default 0)"},
       {"--without", "LIST", "the particle filter's improvements to switch off, comma-separated: modes," + indent +
-                                "disambiguation, narrowing, kinematics, reinit, mode-filter, velocity;" + indent +
-                                "all: plain CONDENSATION"},
+                                "disambiguation, narrowing, kinematics, reinit, mode-filter, velocity," + indent +
+                                "proposals (--tracker particle: half the cloud drawn around the stencil" + indent +
+                                "vote's best cells); all: plain CONDENSATION"},
       {"--save-profile", "FILE", "write the profile these options describe (the run goes on)"},
   };
 }

@@ -54,7 +54,8 @@ bool valid(const ParticleFilterOptions& o) noexcept {
          positive(o.mode_filter_px) && is_finite(o.mode_filter_growth_px) && o.mode_filter_growth_px >= 0.0f &&
          o.mode_filter_growth_px < 1.0e6f && unit(o.high_ratio) && unit(o.lost_ratio) && o.lost_ratio <= o.high_ratio &&
          is_finite(o.lost_spread_growth) && o.lost_spread_growth >= 1.0f && o.lost_spread_growth < 100.0f &&
-         is_finite(o.lost_spread_max) && o.lost_spread_max >= 1.0f && o.lost_spread_max < 1000.0f;
+         is_finite(o.lost_spread_max) && o.lost_spread_max >= 1.0f && o.lost_spread_max < 1000.0f &&
+         unit(o.proposal_fraction) && unit(o.proposal_floor);
 }
 
 ParticleFilterOptions plain_condensation() noexcept {
@@ -67,6 +68,7 @@ ParticleFilterOptions plain_condensation() noexcept {
   o.partial_reinit = false;
   o.mode_filter = false;
   o.lost_spread_growth = 1.0f;
+  o.proposal_fraction = 0.0f;
   return o;
 }
 
@@ -414,6 +416,106 @@ ImageWindow ParticleFilterCore::loader_window(const ImageView& image, std::uint3
   window.width = extent(static_cast<float>(window.x0), wx1);
   window.height = extent(static_cast<float>(window.y0), wy1);
   return window;
+}
+
+// (2 pi)^(3/2): a three-dimensional Gaussian's normalisation.
+constexpr float kTwoPiToThreeHalves = 15.749609945f;
+
+std::size_t ParticleFilterCore::proposal_index(std::uint32_t k) const noexcept {
+  // Midway between the particles a partial scatter re-draws (k n / count),
+  // so that the two rarely take the same particle.
+  return ((2 * std::size_t{k} + 1) * cloud_.size()) / (2 * std::size_t{proposed_});
+}
+
+void ParticleFilterCore::draw_proposals(ParticleEstimate& out) noexcept {
+  proposed_ = 0;
+  ParticleProposals& q = proposals_;
+  const auto positive = [](float v) { return is_finite(v) && v > 0.0f && v < 1.0e6f; };
+  // A proposer's output is checked like any caller's input: nothing is drawn
+  // from a malformed one.
+  if (q.count == 0 || q.count > kMaxParticleProposals || !positive(q.sigma_px) || !positive(q.sigma_deg) ||
+      !(is_finite(q.region_volume) && q.region_volume > 0.0f))
+    return;
+  for (std::uint32_t k = 0; k < q.count; ++k)
+    if (!finite_pose(q.poses[k]) || q.poses[k].depth >= context_.depth_count) return;
+  const auto n = static_cast<std::uint32_t>(cloud_.size());
+  auto count = static_cast<std::uint32_t>(options_.proposal_fraction * static_cast<float>(n) + 0.5f);
+  if (count > n) count = n;
+  proposed_ = count;
+  for (std::uint32_t k = 0; k < count; ++k) {
+    // Round robin: each place draws an equal share (the proposal density is
+    // their equal mixture).
+    const Pose& c = q.poses[k % q.count];
+    Particle& p = cloud_[proposal_index(k)];
+    p.pose.x = c.x + q.sigma_px * rng_.normal();
+    p.pose.y = c.y + q.sigma_px * rng_.normal();
+    p.pose.theta_deg = c.theta_deg + q.sigma_deg * rng_.normal();
+    p.pose.depth = c.depth;
+    p.weight = 1.0f / static_cast<float>(n);
+  }
+  out.proposed = count;
+}
+
+// The motion model's density at `pose` (per px^2 deg, per depth), as the
+// options describe it: the last frame's modes (the estimate before there are
+// any), each moved by the velocity and widened by the diffusion plus half its
+// radius, mixed with the proposer's uniform in the share max(floor, 1 - c).
+float ParticleFilterCore::prior_density(const Pose& pose) const noexcept {
+  const ParticleFilterOptions& o = options_;
+  const ParticleContext& c = context_;
+  float share = c.lost ? 1.0f : 1.0f - c.confidence;
+  if (share < o.proposal_floor) share = o.proposal_floor;
+  const float uniform = share / proposals_.region_volume;
+  if (!(share < 1.0f)) return uniform;
+  const float sx = o.sigma_px * c.spread, st = o.sigma_deg * c.spread;
+  // The widths add (rather than in quadrature, which needs a square root):
+  // a little wider than the cloud, so a proposal near a mode is not undercounted.
+  const float sd_px = sx + 0.5f * o.mode_radius_px, sd_deg = st + 0.5f * o.mode_radius_deg;
+  const float var_px = sd_px * sd_px, var_deg = sd_deg * sd_deg;
+  const float norm = 1.0f / (kTwoPiToThreeHalves * var_px * sd_deg);
+  const bool moving = o.constant_velocity;
+  const auto depth_factor = [&](std::uint16_t mode_depth) {
+    if (c.depth_count <= 1) return 1.0f;
+    const int d = static_cast<int>(pose.depth) - static_cast<int>(mode_depth);
+    return d == 0 ? 1.0f - o.depth_change : (d == 1 || d == -1) ? 0.5f * o.depth_change : 0.0f;
+  };
+  const auto gaussian = [&](const Pose& m) {
+    const float dx = pose.x - (m.x + (moving ? c.vx : 0.0f)), dy = pose.y - (m.y + (moving ? c.vy : 0.0f));
+    const float dt = pose.theta_deg - (m.theta_deg + (moving ? c.vtheta : 0.0f));
+    return exp_neg(0.5f * ((dx * dx + dy * dy) / var_px + dt * dt / var_deg)) * depth_factor(m.depth);
+  };
+  float sum = 0.0f, total = 0.0f;
+  for (std::uint32_t m = 0; m < mode_count_; ++m) {
+    sum += modes_[m].weight * gaussian(modes_[m].pose);
+    total += modes_[m].weight;
+  }
+  const float motion = total > 0.0f ? sum / total : gaussian(c.estimate);
+  return (1.0f - share) * norm * motion + uniform;
+}
+
+// The proposals' density at `pose`: their equal mixture.
+float ParticleFilterCore::proposal_density(const Pose& pose) const noexcept {
+  const ParticleProposals& q = proposals_;
+  const float var_px = q.sigma_px * q.sigma_px, var_deg = q.sigma_deg * q.sigma_deg;
+  float sum = 0.0f;
+  for (std::uint32_t k = 0; k < q.count; ++k) {
+    const Pose& c = q.poses[k];
+    if (c.depth != pose.depth) continue;
+    const float dx = pose.x - c.x, dy = pose.y - c.y, dt = pose.theta_deg - c.theta_deg;
+    sum += exp_neg(0.5f * ((dx * dx + dy * dy) / var_px + dt * dt / var_deg));
+  }
+  return sum / (kTwoPiToThreeHalves * var_px * q.sigma_deg * static_cast<float>(q.count));
+}
+
+void ParticleFilterCore::correct_proposals() noexcept {
+  if (proposed_ == 0 || !options_.proposal_correction) return;
+  for (std::uint32_t k = 0; k < proposed_; ++k) {
+    Particle& p = cloud_[proposal_index(k)];
+    // A particle's own place gives a density > 0: the normal deviates are
+    // bounded (a sum of four uniforms), so exp_neg's cut-off is never reached.
+    const float g = proposal_density(p.pose);
+    p.weight = g > 0.0f ? p.weight * (prior_density(p.pose) / g) : 0.0f;
+  }
 }
 
 void ParticleFilterCore::sharpen() noexcept {

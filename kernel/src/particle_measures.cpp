@@ -181,6 +181,34 @@ void StencilVoteMeasure::weigh(std::span<Particle> particles) noexcept {
   for (Particle& p : particles) p.weight = score(p.pose);
 }
 
+StencilVoteProposer::StencilVoteProposer(const TableView& table, const Detector& detector, TrackerScratch scratch,
+                                         std::uint32_t count) noexcept
+    : table_(table),
+      detector_(detector),
+      scratch_(scratch),
+      count_(count < 1 ? 1 : count > kMaxParticleProposals ? kMaxParticleProposals : count) {}
+
+Status StencilVoteProposer::propose(const ImageView& image, const Pose& predicted, ParticleProposals& out) noexcept {
+  out.count = 0;
+  GABARIT_TRY(prepare_frame(table_, detector_, image, predicted, scratch_, frame_));
+  GABARIT_TRY(vote_prepared(table_, frame_, scratch_, tally_));
+  CellScore top[kMaxParticleProposals];
+  const std::uint32_t k = count_ < table_.cell_count() ? count_ : table_.cell_count();
+  GABARIT_TRY(select_top_cells(table_, scratch_.counters, std::span<CellScore>(top, k)));
+  for (std::uint32_t i = 0; i < k && top[i].votes > 0; ++i)
+    out.poses[out.count++] = pose_of_cell(table_, top[i].cell, predicted, frame_.roi_centre_x, frame_.roi_centre_y);
+  // An axis's spacing, and its extent with half a cell either side (one
+  // unit, a pixel or a degree, for an axis of one cell).
+  const auto spacing = [](const Axis& a) { return a.cells > 1 ? (a.max - a.min) / static_cast<float>(a.cells - 1) : 1.0f; };
+  const auto extent = [&](const Axis& a) { return a.cells > 1 ? (a.max - a.min) + spacing(a) : 1.0f; };
+  const Axis ax = table_.axis_x(), ay = table_.axis_y(), at = table_.axis_theta();
+  const float px = 0.5f * (spacing(ax) + spacing(ay)), deg = at.cells > 1 ? spacing(at) : 0.25f;
+  out.sigma_px = px > 0.5f ? px : 0.5f;
+  out.sigma_deg = deg > 0.25f ? deg : 0.25f;
+  out.region_volume = extent(ax) * extent(ay) * extent(at) * static_cast<float>(table_.depth_count());
+  return Status::kOk;
+}
+
 IntensityCorrelationMeasure::IntensityCorrelationMeasure(const FocusStack& stack, std::uint32_t samples) noexcept : stack_(stack) {
   if (samples == 0 || !valid_focus_stack(stack)) return;
   const std::uint32_t want = samples < 16 ? 16 : (samples > kMaxIntensityMeasureSamples ? kMaxIntensityMeasureSamples : samples);

@@ -40,7 +40,7 @@ SessionProfile tuned() {
   p.seed = 1234567890123ull;
   p.edge_stride = 9;
   p.edge_tolerance = 3;
-  p.particle_improvements_off = kImproveModes | kImproveReinit;
+  p.particle_improvements_off = kImproveModes | kImproveReinit | kImproveProposals;
   p.verify_refine = RefineBy::kQuadraticDesign;
   return p;
 }
@@ -99,7 +99,7 @@ TEST(SessionProfile, ValidateRefusesWhatNoSessionRuns) {
   EXPECT_TRUE(bad([](SessionProfile& p) { p.search_budget = kSearchPlacementCount; }));
   EXPECT_TRUE(bad([](SessionProfile& p) { p.particles = 0; }));
   EXPECT_TRUE(bad([](SessionProfile& p) { p.edge_tolerance = 4; }));
-  EXPECT_TRUE(bad([](SessionProfile& p) { p.particle_improvements_off = 1u << 9; }));
+  EXPECT_TRUE(bad([](SessionProfile& p) { p.particle_improvements_off = 1u << 10; }));
   EXPECT_TRUE(bad([](SessionProfile& p) { p.refine = true; }));  // a part added to the full session
   EXPECT_TRUE(bad([](SessionProfile& p) { p.plain = true, p.recovery = RecoveryKind::kParticles; }));
   EXPECT_TRUE(bad([](SessionProfile& p) { p.recovery = static_cast<RecoveryKind>(4); }));

@@ -173,6 +173,13 @@ PY
 $g track --tracker particle --measure intensity --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init" -o "$s/pi.csv" 2>/dev/null \
   || fail "track --tracker particle --measure intensity"
 cmp -s "$s/pa.csv" "$s/pi.csv" || fail "the particle filter: the default measure is not the intensity measure on a table with images"
+# Vote-guided proposals are on by default; --without proposals is the filter
+# without them, and holds the scene as well (within 5 px on every frame).
+$g track --tracker particle --without proposals --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init" -o "$s/pu.csv" 2>/dev/null \
+  || fail "track --tracker particle --without proposals"
+cmp -s "$s/pa.csv" "$s/pu.csv" && fail "the particle filter: --without proposals gave the default's poses"
+$g eval --gt "$s/gt.csv" --poses "$s/pu.csv" | python3 -c 'import json,sys; a=json.load(sys.stdin); sys.exit(a["within_5px"] != a["frames"])' \
+  || fail "the particle filter without proposals lost the microscope scene"
 $g track --tracker particle --table "$s/t10.gbt" --frames "$s/frames.y4m" --init "$init" -o "$s/p10e.csv" 2>/dev/null \
   || fail "track --tracker particle on a table without images"
 $g track --tracker particle --measure edges --table "$s/t10.gbt" --frames "$s/frames.y4m" --init "$init" -o "$s/p10f.csv" 2>/dev/null \

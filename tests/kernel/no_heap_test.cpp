@@ -211,7 +211,7 @@ int main() {
   static RoiPoint strip[64 * 4];
   static Particle cloud[256], next[256];
   static std::uint32_t order[512];
-  // The particle filter with both measures, every improvement on, a scatter and lost frames.
+  // The particle filter with both measures, every improvement on (vote proposals too), a scatter and lost frames.
   {
     EdgeMapLoader loader(detector_of(table), bits, strip, 64, 64);
     EdgeCorrelationMeasure edges(table, loader, 2, 0), fine(table, loader, 1, 0);
@@ -231,6 +231,10 @@ int main() {
     run("particle filter, edge measure", with_edges);
     ParticleFilter<StencilVoteMeasure, EdgeCorrelationMeasure, EdgeMapLoader> with_votes(stencil, &fine, &loader);
     run("particle filter, stencil measure", with_votes);
+    StencilVoteProposer proposer(table, detector_of(table), scratch);  // the stencil measure's scratch: not run together
+    EdgeParticleFilter guided(edges, &fine, &loader);
+    guided.propose_with(&proposer);
+    run("particle filter, edge measure, vote proposals", guided);
   }
   // A session re-acquiring through the particle filter.
   {

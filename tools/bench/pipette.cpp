@@ -39,6 +39,7 @@ struct Method {
   bool particle;     // the particle filter instead
   app::ParticleMeasureKind measure;
   bool particle_recovery = false;  // the session re-acquiring with the particle filter
+  bool vote_proposals = true;      // the particle filter's vote-guided proposals (its default)
 };
 const Method kMethods[] = {
     {"custom edges, no motion model (plain loop)", false, false, false, {}},
@@ -48,6 +49,8 @@ const Method kMethods[] = {
     {"particle filter, edge measure (Canny)", true, false, true, app::ParticleMeasureKind::kEdges},
     {"particle filter, stencil measure (Canny table)", true, false, true, app::ParticleMeasureKind::kStencil},
     {"particle filter, intensity measure (the verified score)", true, false, true, app::ParticleMeasureKind::kIntensity},
+    {"particle filter, intensity measure, without vote proposals", true, false, true, app::ParticleMeasureKind::kIntensity, false,
+     false},
     {"Canny, motion model, particle re-acquisition", true, true, false, {}, true},
 };
 constexpr std::size_t kMethodCount = sizeof kMethods / sizeof kMethods[0];
@@ -226,6 +229,7 @@ int run_pipette(const PipetteOptions& o) {
         po.particles = o.particles;
         po.measure = method.measure;
         po.finer = method.measure != app::ParticleMeasureKind::kStencil;  // as gabarit track --measure stencil
+        if (!method.vote_proposals) po.proposals = 0;
         app::run_particle_tracking(table, src, init, po, on_row);
       } else {
         host::TrackingOptions to;

@@ -48,6 +48,7 @@ struct Measure {
   int occlusions = 0, reacquired_within_10 = 0;
   std::size_t search_frames = 0;
   double search_us = 0;
+  int returns = 0, back_within_5 = 0, back_within_10 = 0;  // every method: returns to view, back within 2 px in 5 / 10 frames
   LedgerMeans ledger;  // sessions only: the frame-cost ledger's means per frame
 };
 
@@ -74,6 +75,7 @@ constexpr const char* kSession = "gabarit default session";
 constexpr const char* kNcc = "OpenCV NCC bank";
 // No commas in a method name: the CSV does not quote its fields.
 constexpr const char* kParticle = "particle filter (1000 particles; its default measure: intensity)";
+constexpr const char* kParticleUnguided = "particle filter without vote proposals";
 constexpr const char* kSessionParticles = "default session with particle re-acquisition";
 constexpr const char* kSessionDetection = "default session with re-acquisition by detection";
 
@@ -159,7 +161,12 @@ Measure measure(const std::vector<app::PoseSample>& poses, const std::vector<app
   m.failures_per_100 = 100.0 * static_cast<double>(a.failures) / n;
   m.within_1deg = 100.0 * static_cast<double>(a.within_1deg) / n;
   if (depth_counts) m.depth = 100.0 * static_cast<double>(a.depth_exact) / n;
-  for (int r : a.reacquired_after) m.reacquired = (r < 0 || m.reacquired < 0) ? -1 : std::max(m.reacquired, r);
+  for (int r : a.reacquired_after) {
+    m.reacquired = (r < 0 || m.reacquired < 0) ? -1 : std::max(m.reacquired, r);
+    ++m.returns;
+    m.back_within_5 += r >= 0 && r <= 5;
+    m.back_within_10 += r >= 0 && r <= 10;
+  }
   m.reacquired_in_reach = -2;
   for (std::size_t i = 0; i < a.reacquired_after.size() && i < in_reach.size(); ++i) {
     if (!in_reach[i]) continue;
@@ -284,16 +291,20 @@ SceneResult run_scene(std::uint32_t index, std::uint32_t frames_per_scene, const
       });
     }
   }
-  if (particles) {  // gabarit track --tracker particle's defaults
+  // gabarit track --tracker particle's defaults, and beside them --without proposals.
+  for (const bool guided : {true, false}) {
+    if (!particles) break;
     std::vector<app::PoseSample> poses;
     std::vector<double> micros;
     MemoryFrames src(frames);
-    app::run_particle_tracking(table, src, init, app::ParticleRunOptions{}, [&](const app::TrackRow& row) {
+    app::ParticleRunOptions po;
+    if (!guided) po.proposals = 0;
+    app::run_particle_tracking(table, src, init, po, [&](const app::TrackRow& row) {
       poses.push_back({row.frame, row.step.pose.x, row.step.pose.y, row.step.pose.theta_deg, row.step.pose.depth, true});
       micros.push_back(row.micros);
     });
     out.methods.push_back(measure(poses, truth, micros, depth_counts, in_reach));
-    out.names.push_back(kParticle);
+    out.names.push_back(guided ? kParticle : kParticleUnguided);
   }
   return out;
 }
@@ -329,6 +340,39 @@ void shortfalls_against(const std::vector<SceneResult>& scenes, std::size_t peer
   }
   md << "Default session at least " << scenes[0].names[peer] << "'s figure minus 1 point (1 px, 1 deg, depth) on " << level << " of "
      << scenes.size() << " scenes" << (list.empty() ? "." : "; short on " + list + ".") << "\n\n";
+}
+
+// The index of the method called `name` in every scene's results, or -1.
+int index_of(const std::vector<SceneResult>& scenes, const char* name) {
+  for (std::size_t m = 0; m < scenes[0].names.size(); ++m)
+    if (scenes[0].names[m] == std::string(name)) return static_cast<int>(m);
+  return -1;
+}
+
+// The particle filter, guided by the vote and not: how soon it finds the
+// target again after an occlusion (issue 31: within 5 frames), per half.
+void particle_reacquisition_table(const std::vector<SceneResult>& scenes, std::ostringstream& md) {
+  const int guided = index_of(scenes, kParticle), unguided = index_of(scenes, kParticleUnguided);
+  if (guided < 0 || unguided < 0) return;
+  md << "| particle filter | half | occlusions re-acquired within 5 frames | within 10 | within 2 px: mean | within 1 deg: mean | "
+        "us/frame: mean |\n|---|---|---:|---:|---:|---:|---:|\n";
+  for (const int m : {guided, unguided}) {
+    for (const bool held : {true, false}) {
+      int returns = 0, within_5 = 0, within_10 = 0;
+      double px2 = 0, deg1 = 0, us = 0, count = 0;
+      for (const SceneResult& sr : scenes) {
+        if (sr.held_out != held) continue;
+        const Measure& r = sr.methods[static_cast<std::size_t>(m)];
+        returns += r.returns, within_5 += r.back_within_5, within_10 += r.back_within_10;
+        px2 += r.within_2px, deg1 += r.within_1deg, us += r.mean_us, ++count;
+      }
+      if (count == 0) continue;
+      md << "| " << (m == guided ? "with vote proposals (default)" : "without (--without proposals)") << " | "
+         << (held ? "held out" : "tuning") << " | " << within_5 << " of " << returns << " | " << within_10 << " of " << returns << " | "
+         << fmt(px2 / count) << "% | " << fmt(deg1 / count) << "% | " << fmt(us / count) << " |\n";
+    }
+  }
+  md << "\n";
 }
 
 // Median and worst over the scenes of one half, per method.
@@ -399,12 +443,8 @@ void summary_table(const std::vector<SceneResult>& scenes, const std::string& ti
   for (std::size_t m = 2; m < methods; ++m)
     if (scenes[0].names[m] == std::string(kNcc)) shortfalls_against(scenes, m, md);
   // The two re-acquisition stages side by side, over every occlusion (not only those within the grid's reach).
-  const auto index_of = [&](const char* name) {
-    for (std::size_t m = 0; m < scenes[0].names.size(); ++m)
-      if (scenes[0].names[m] == std::string(name)) return static_cast<int>(m);
-    return -1;
-  };
-  const int grid = index_of(kSession), particle = index_of(kSessionParticles), detect = index_of(kSessionDetection);
+  const int grid = index_of(scenes, kSession), particle = index_of(scenes, kSessionParticles);
+  const int detect = index_of(scenes, kSessionDetection);
   if (grid >= 0 && (particle >= 0 || detect >= 0)) {
     md << "| re-acquisition | occlusions re-acquired within 10 frames | search frames | mean us per search frame |\n|---|---:|---:|---:|\n";
     for (const int m : {grid, particle, detect}) {
@@ -424,6 +464,7 @@ void summary_table(const std::vector<SceneResult>& scenes, const std::string& ti
     }
     md << "\n";
   }
+  particle_reacquisition_table(scenes, md);
   // Detection: every frame searched with no starting pose.
   if (scenes[0].detection.ran) {
     md << "| detection (every frame, no pose) | top 1: median | worst | top 5: median | worst | frames without the target with a "

@@ -29,6 +29,9 @@
 //    that all are scored over the same samples. It reads the frame itself
 //    (no loader). Cost per particle: about `samples` bilinear samples (the
 //    list is made once, so the surround's pixels cost nothing).
+//  - StencilVoteProposer: vote-guided proposals (ParticleFilter::
+//    propose_with): the table voted at the prediction as track_step votes
+//    it, and its best cells as the places to draw particles around.
 // No heap: the bitmap, the features and the counters come from the caller.
 #pragma once
 
@@ -132,6 +135,28 @@ class StencilVoteMeasure {
   Pose predicted_;
   SinCos rotation_;
   bool prepared_ = false;
+};
+
+class StencilVoteProposer {
+ public:
+  // scratch: as track_step's (tracker.hpp), not shared with another voter
+  // of the same frame. count: the best cells proposed, 1..kMaxParticleProposals.
+  // The table must outlive the proposer.
+  StencilVoteProposer(const TableView& table, const Detector& detector, TrackerScratch scratch, std::uint32_t count = 4) noexcept;
+  // The best `count` cells with any votes, each as the pose its motion from
+  // `predicted` gives; drawn around with one cell's spacing as sigma (at
+  // least 0.5 px and 0.25 deg); the region is the table's range at every
+  // depth. Errors: track_step's.
+  [[nodiscard]] Status propose(const ImageView& image, const Pose& predicted, ParticleProposals& out) noexcept;
+  std::uint64_t votes() const noexcept { return tally_.votes; }
+
+ private:
+  const TableView& table_;
+  Detector detector_;
+  TrackerScratch scratch_;
+  std::uint32_t count_;
+  PreparedFrame frame_;
+  VoteTally tally_;
 };
 
 // The sparse subset's default size: about 256 samples on the object and its

@@ -34,8 +34,11 @@
 
 namespace gabarit {
 
-// The filter this stage runs: edge correlation, the finer edge correlation, the edge map.
-using EdgeParticleFilter = ParticleFilter<EdgeCorrelationMeasure, EdgeCorrelationMeasure, EdgeMapLoader>;
+// The filter this stage runs: edge correlation, the finer edge correlation,
+// the edge map; the particle tracker (gabarit track --tracker particle) may
+// give it a vote proposer, which this stage does not.
+using EdgeParticleFilter = ParticleFilter<EdgeCorrelationMeasure, EdgeCorrelationMeasure, EdgeMapLoader, DefaultPropagation,
+                                          KinematicCompensation, ModeAnalysis, StencilVoteProposer>;
 
 struct ParticleRecoveryOptions {
   float reach_px = 40.0f;         // the region's half-side on the first lost frame

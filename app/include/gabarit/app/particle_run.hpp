@@ -53,6 +53,10 @@ struct ParticleRunOptions {
   bool finer = true;
   app::VoterChoice voter = app::VoterChoice::kAuto;  // the stencil measure's vote
   std::uint32_t intensity_samples = kIntensityMeasureSamples;  // the intensity measure's sparse subset
+  // Vote-guided proposals (filter.proposal_fraction of the cloud, with the
+  // intensity and edge measures): the stencil vote's best cells drawn
+  // around each frame, 0..kMaxParticleProposals (0: none).
+  std::uint32_t proposals = 4;
 };
 
 // The profile's particle numbers (particles, seed, the edge measure's stride

@@ -42,7 +42,8 @@ inline constexpr std::uint32_t kImproveReinit = 1u << 4;
 inline constexpr std::uint32_t kImproveModeFilter = 1u << 5;
 inline constexpr std::uint32_t kImproveVelocity = 1u << 6;
 inline constexpr std::uint32_t kAllImprovements = 1u << 7;
-inline constexpr std::uint32_t kKnownImprovements = (1u << 8) - 1;
+inline constexpr std::uint32_t kImproveProposals = 1u << 8;  // vote-guided proposals (issue 31)
+inline constexpr std::uint32_t kKnownImprovements = (1u << 9) - 1;
 // The filter's options with the improvements in `off` switched off.
 ParticleFilterOptions particle_filter_options(std::uint32_t off) noexcept;
 
