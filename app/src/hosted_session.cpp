@@ -1,10 +1,10 @@
 #include "gabarit/app/hosted_session.hpp"
 
-#include <chrono>
 #include <string>
 
 #include "gabarit/app/error.hpp"
 #include "gabarit/app/particle_run.hpp"
+#include "gabarit/app/pose_row.hpp"
 
 namespace gabarit::app {
 
@@ -13,13 +13,6 @@ namespace {
 const SessionProfile& checked(const SessionProfile& profile) {
   if (validate(profile) != Status::kOk) throw Error("the session profile is not valid");
   return profile;
-}
-
-// The session's ledger clock (frame_ledger.hpp): nanoseconds of the host's
-// monotonic clock.
-std::uint64_t steady_nanoseconds() noexcept {
-  return static_cast<std::uint64_t>(
-      std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch()).count());
 }
 
 }  // namespace

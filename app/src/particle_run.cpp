@@ -126,6 +126,7 @@ EdgeParticleFilter& ParticleTracker::edge_filter() {
 }
 
 void ParticleTracker::start(const Pose& initial) {
+  parts_->core().use_clock(&steady_nanoseconds);
   const Status s = parts_->core().start(parts_->options.filter, initial, parts_->table.depth_count(), parts_->options.seed,
                                         {parts_->cloud, parts_->next, parts_->order});
   if (s != Status::kOk) throw app::Error(std::string("particle filter: start failed: ") + status_name(s));
@@ -166,6 +167,8 @@ void run_particle_tracking(const TableView& table, app::FrameSource& frames, con
                      : e.state == TrackState::kUncertain ? Confidence::kIntermediate
                                                          : Confidence::kNone;
     row.micros = std::chrono::duration<double, std::micro>(stop - start).count();
+    row.has_ledger = true;
+    row.ledger = tracker->core().ledger();
     on_row(row);
   }
 }

@@ -1,8 +1,14 @@
 #include "gabarit/app/pose_row.hpp"
 
+#include <chrono>
 #include <cstdio>
 
 namespace gabarit::app {
+
+std::uint64_t steady_nanoseconds() noexcept {
+  return static_cast<std::uint64_t>(
+      std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch()).count());
+}
 
 void fill_row(TrackRow& row, const SessionResult& result) {
   row.step = result.step;

@@ -3,6 +3,7 @@
 #include "gabarit/assert.hpp"
 #include "gabarit/deterministic_math.hpp"
 #include "gabarit/features.hpp"
+#include "gabarit/finder_search.hpp"
 #include "gabarit/verification.hpp"
 #include "intensity_samples.hpp"
 
@@ -207,6 +208,13 @@ Status StencilVoteProposer::propose(const ImageView& image, const Pose& predicte
   out.sigma_deg = deg > 0.25f ? deg : 0.25f;
   out.region_volume = extent(ax) * extent(ay) * extent(at) * static_cast<float>(table_.depth_count());
   return Status::kOk;
+}
+
+void StencilVoteProposer::account(FrameLedger& ledger) const noexcept {
+  ledger.add(FramePhase::kVote, track_features_work(table_) + tally_.votes, 0);
+  ledger.pixels_scanned += frame_.pixels_scanned;
+  ledger.features += tally_.features;
+  ledger.votes += tally_.votes;
 }
 
 IntensityCorrelationMeasure::IntensityCorrelationMeasure(const FocusStack& stack, std::uint32_t samples) noexcept : stack_(stack) {

@@ -178,6 +178,11 @@ cmp -s "$s/pa.csv" "$s/pi.csv" || fail "the particle filter: the default measure
 $g track --tracker particle --without proposals --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init" -o "$s/pu.csv" 2>/dev/null \
   || fail "track --tracker particle --without proposals"
 cmp -s "$s/pa.csv" "$s/pu.csv" && fail "the particle filter: --without proposals gave the default's poses"
+# Its frame-cost ledger (--stats): the proposals' vote, the measure, the rest.
+$g track --tracker particle --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init" --stats "$s/pstats.json" -o "$s/pa2.csv" 2>/dev/null \
+  || fail "track --tracker particle --stats"
+python3 -c 'import json,sys; l=json.load(open(sys.argv[1]))["ledger"]; sys.exit(not (l["vote"]["work_per_frame"] > 0 and l["verify"]["us_per_frame"] > 0 and l["correlations_per_frame"] >= 1000))' \
+  "$s/pstats.json" || fail "the particle filter's ledger: $(cat "$s/pstats.json")"
 $g eval --gt "$s/gt.csv" --poses "$s/pu.csv" | python3 -c 'import json,sys; a=json.load(sys.stdin); sys.exit(a["within_5px"] != a["frames"])' \
   || fail "the particle filter without proposals lost the microscope scene"
 $g track --tracker particle --table "$s/t10.gbt" --frames "$s/frames.y4m" --init "$init" -o "$s/p10e.csv" 2>/dev/null \

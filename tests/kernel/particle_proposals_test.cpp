@@ -11,8 +11,11 @@
 
 #include "gabarit/crc32.hpp"
 #include "gabarit/deterministic_math.hpp"
+#include "gabarit/finder_search.hpp"
+#include "gabarit/frame_ledger.hpp"
 #include "gabarit/particle_filter.hpp"
 #include "gabarit/particle_measures.hpp"
+#include "gabarit/particle_recovery.hpp"
 #include "test_tables.hpp"
 
 namespace gabarit {
@@ -196,6 +199,40 @@ TEST(ParticleFilter, VoteProposalsReacquireWithinAFewFrames) {
   const Reacquisition a = reacquire(s, 4, 1), b = reacquire(s, 4, 1);
   EXPECT_EQ(a.crc, b.crc);
   EXPECT_EQ(a.crc, 1608966699u) << "proposals digest";
+}
+
+// A clock that advances one tick per reading.
+std::uint64_t g_ticks = 0;
+std::uint64_t counting_clock() noexcept { return ++g_ticks; }
+
+TEST(ParticleFilter, TheLedgerChargesTheVoteTheLoaderTheMeasureAndTheRest) {
+  const Scene s;
+  testing::TrackerTestScratch scratch(s.table);
+  std::vector<std::uint64_t> bits(edge_map_words(160, 160));
+  std::vector<RoiPoint> features(160);
+  EdgeMapLoader loader({table_format::DetectorKind::kBinary, 0}, bits, features, 160, 160);
+  EdgeCorrelationMeasure coarse(s.table, loader, 2, 0), fine(s.table, loader, 1, 0);
+  StencilVoteProposer proposer(s.table, detector_of(s.table), scratch.view());
+  EdgeParticleFilter filter(coarse, &fine, &loader);
+  filter.propose_with(&proposer);
+  std::vector<Particle> cloud(200), next(200);
+  std::vector<std::uint32_t> order(400);
+  ASSERT_EQ(filter.start({}, {80, 80, 0, 0}, 1, 3, {cloud, next, order}), Status::kOk);
+  ParticleEstimate e;
+  ASSERT_EQ(filter.step(s.frame(81, 80, 0.5f).view(), e), Status::kOk);
+  const FrameLedger& l = filter.ledger();
+  EXPECT_EQ(l.total_ticks(), 0u) << "no clock: nothing timed";
+  EXPECT_EQ(l.votes, proposer.votes());
+  EXPECT_GT(l.votes, 0u);
+  EXPECT_EQ(l.work[static_cast<int>(FramePhase::kVote)], track_features_work(s.table) + proposer.votes());
+  EXPECT_EQ(l.correlations, 200u + std::min(e.modes, ParticleFilterOptions{}.disambiguate_modes)) << "every particle, the scored modes";
+  filter.use_clock(&counting_clock);
+  const std::uint64_t before = g_ticks;
+  ASSERT_EQ(filter.step(s.frame(82, 80, 1.0f).view(), e), Status::kOk);
+  for (const FramePhase p : {FramePhase::kVote, FramePhase::kFeatures, FramePhase::kVerify, FramePhase::kOther})
+    EXPECT_GT(l.ticks[static_cast<int>(p)], 0u) << frame_phase_name(p);
+  EXPECT_EQ(l.ticks[static_cast<int>(FramePhase::kRecovery)], 0u);
+  EXPECT_EQ(l.total_ticks(), g_ticks - before - 1) << "every tick between the first reading and the last, once";
 }
 
 }  // namespace

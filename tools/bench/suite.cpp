@@ -43,13 +43,13 @@ struct Measure {
   // The precision of the frames tracked: the mean position error (px) over
   // the visible frames within 1 px (-1: none).
   double subpixel_error = -1;
-  // Sessions only: occlusions, those re-acquired (within 2 px) within 10
-  // frames, and the frames that searched (lost, or re-acquiring) with their mean time.
-  int occlusions = 0, reacquired_within_10 = 0;
+  // Every method: returns to view (occlusions ending), and those re-acquired
+  // (app::evaluate: within 2 px) within 5 and within 10 frames.
+  int returns = 0, back_within_5 = 0, back_within_10 = 0;
+  // Sessions only: the frames that searched (lost, or re-acquiring) with their mean time.
   std::size_t search_frames = 0;
   double search_us = 0;
-  int returns = 0, back_within_5 = 0, back_within_10 = 0;  // every method: returns to view, back within 2 px in 5 / 10 frames
-  LedgerMeans ledger;  // sessions only: the frame-cost ledger's means per frame
+  LedgerMeans ledger;  // sessions and the particle filter: the frame-cost ledger's means per frame
 };
 
 // A detector over every frame of a scene, without a starting pose.
@@ -248,9 +248,6 @@ SceneResult run_scene(std::uint32_t index, std::uint32_t frames_per_scene, const
     });
     out.methods.push_back(measure(poses, truth, micros, depth_counts, in_reach));
     Measure& m = out.methods.back();
-    const app::Accuracy a = app::evaluate(poses, truth);
-    m.occlusions = static_cast<int>(a.reacquired_after.size());
-    for (int r : a.reacquired_after) m.reacquired_within_10 += r >= 0 && r <= 10;
     m.search_frames = lost_micros.size();
     for (double v : lost_micros) m.search_us += v / static_cast<double>(lost_micros.size());
     m.ledger = ledger.means();
@@ -299,11 +296,14 @@ SceneResult run_scene(std::uint32_t index, std::uint32_t frames_per_scene, const
     MemoryFrames src(frames);
     app::ParticleRunOptions po;
     if (!guided) po.proposals = 0;
+    LedgerTally ledger;
     app::run_particle_tracking(table, src, init, po, [&](const app::TrackRow& row) {
       poses.push_back({row.frame, row.step.pose.x, row.step.pose.y, row.step.pose.theta_deg, row.step.pose.depth, true});
       micros.push_back(row.micros);
+      ledger.add(row);
     });
     out.methods.push_back(measure(poses, truth, micros, depth_counts, in_reach));
+    out.methods.back().ledger = ledger.means();
     out.names.push_back(guided ? kParticle : kParticleUnguided);
   }
   return out;
@@ -454,7 +454,7 @@ void summary_table(const std::vector<SceneResult>& scenes, const std::string& ti
       double us = 0;
       for (const SceneResult& sr : scenes) {
         const Measure& r = sr.methods[static_cast<std::size_t>(m)];
-        occlusions += r.occlusions, within += r.reacquired_within_10;
+        occlusions += r.returns, within += r.back_within_10;
         us += r.search_us * static_cast<double>(r.search_frames);
         frames += r.search_frames;
       }
@@ -551,7 +551,7 @@ int run_suite(const SuiteOptions& o) {
           << "," << fmt(x.within_2px) << "," << fmt(x.within_1deg) << "," << (x.depth < 0 ? "" : fmt(x.depth)) << ","
           << x.reacquired << "," << x.reacquired_in_reach << "," << fmt(x.mean_us) << "," << fmt(x.p99_us) << "," << fmt(x.within_5px)
           << "," << fmt(x.failures_per_100) << "," << fmt(x.p50_us) << "," << fmt(x.max_us) << "," << host::name_of(r.family);
-      csv << ledger_csv_columns(x.ledger);  // empty for a method without one (the NCC bank, the particle filter)
+      csv << ledger_csv_columns(x.ledger);  // empty for a method without one (the NCC bank)
       csv << "," << (x.subpixel_error < 0 ? "" : fmt(x.subpixel_error, 3)) << "\n";
     }
     for (int which = 0; which < 2; ++which) {

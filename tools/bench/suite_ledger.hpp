@@ -14,7 +14,7 @@ namespace gabarit::bench {
 
 // Means per frame of one method on one scene (ticks in microseconds).
 struct LedgerMeans {
-  bool present = false;  // every row had a ledger (sessions; not the NCC bank or the particle filter)
+  bool present = false;  // every row had a ledger (sessions and the particle filter; not the NCC bank)
   double phase_us[kFramePhaseCount] = {}, phase_work[kFramePhaseCount] = {};
   double io_us = 0, pixels = 0, features = 0, votes = 0, correlations = 0;
 };

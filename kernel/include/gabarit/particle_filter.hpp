@@ -67,6 +67,7 @@
 #include <cstdint>
 #include <span>
 
+#include "gabarit/frame_ledger.hpp"
 #include "gabarit/image_view.hpp"
 #include "gabarit/motion_filter.hpp"
 #include "gabarit/pose.hpp"
@@ -319,6 +320,14 @@ class ParticleFilterCore {
   [[nodiscard]] Status scatter(float x0, float x1, float y0, float y1, float theta0_deg, float theta1_deg,
                                float fraction = 1.0f) noexcept;
 
+  // The frame-cost ledger (frame_ledger.hpp) of the last step, timed with
+  // `clock` (null: not timed): the proposer under kVote (its feature
+  // detection and its vote; work: its features' and counter increments),
+  // the loader under kFeatures, the measure and the finer measure under
+  // kVerify (correlations: the particles and modes they scored), the rest
+  // (propagation, weights, clustering, the estimate) under kOther.
+  void use_clock(TickSource clock) noexcept { clock_ = clock; }
+  const FrameLedger& ledger() const noexcept { return ledger_; }
   const ParticleContext& context() const noexcept { return context_; }
   std::span<const Particle> particles() const noexcept { return cloud_; }
   std::span<const ParticleMode> modes() const noexcept { return {modes_, mode_count_}; }
@@ -347,6 +356,8 @@ class ParticleFilterCore {
   std::uint32_t mode_count_ = 0;
   ParticleProposals proposals_;
   std::uint32_t proposed_ = 0;      // this frame's proposed particles (0: none)
+  TickSource clock_ = nullptr;
+  FrameLedger ledger_;
   bool started_ = false;
   bool scattered_ = false;          // the cloud was scattered: the next step skips propagation
 
@@ -385,40 +396,53 @@ class ParticleFilter : public ParticleFilterCore {
   // One frame. Errors: kInvalidArgument for an invalid image or before
   // start(); the loader's and the measures'.
   [[nodiscard]] Status step(const ImageView& image, ParticleEstimate& out) noexcept {
+    ledger_ = {};
+    std::uint64_t mark = read_ticks(clock_);
     GABARIT_TRY(begin_step(image, out));
     if (!scattered_) propagation_.propagate(cloud_, next_, context_, rng_);
     after_propagation(out);
     proposals_.count = 0;
     proposed_ = 0;
+    mark = charge(FramePhase::kOther, mark);
     if (proposer_ != nullptr && options_.proposal_fraction > 0.0f) {
       GABARIT_TRY(proposer_->propose(image, context_.predicted, proposals_));
+      if constexpr (requires(const Proposer& p, FrameLedger& l) { p.account(l); }) proposer_->account(ledger_);
       draw_proposals(out);
     }
+    mark = charge(FramePhase::kVote, mark);
     if (loader_ != nullptr) {
       std::uint32_t reach = measure_.reach_px();
       if (finer_ != nullptr && finer_->reach_px() > reach) reach = finer_->reach_px();
       GABARIT_TRY(loader_->load(image, loader_window(image, reach)));
     }
+    mark = charge(FramePhase::kFeatures, mark);
     GABARIT_TRY(measure_.prepare(image, context_.predicted));
     const bool finer_is_measure = static_cast<const void*>(finer_) == static_cast<const void*>(&measure_);
     if (finer_ != nullptr && !finer_is_measure) GABARIT_TRY(finer_->prepare(image, context_.predicted));
     measure_.weigh(cloud_);
+    ledger_.correlations += static_cast<std::uint32_t>(cloud_.size());
+    mark = charge(FramePhase::kVerify, mark);
     sharpen();
     correct_proposals();
     compensation_.compensate(cloud_, context_);
     mode_count_ = analysis_.cluster(cloud_, order_, context_, {modes_, kMaxParticleModes});
+    mark = charge(FramePhase::kOther, mark);
     // Disambiguation: the finer measure scores the heaviest modes.
     std::uint32_t scored = 0;
     if (options_.disambiguate && finer_ != nullptr)
       scored = options_.disambiguate_modes < mode_count_ ? options_.disambiguate_modes : mode_count_;
     for (std::uint32_t m = 0; m < mode_count_; ++m) modes_[m].score = m < scored ? finer_->score(modes_[m].pose) : -1.0f;
+    ledger_.correlations += scored;
+    mark = charge(FramePhase::kVerify, mark);
     ParticleAnalysisResult analysis;
     analysis_.choose({modes_, mode_count_}, scored, context_, analysis);
     out.modes = mode_count_;
-    if (mode_count_ == 0) return Status::kOk;  // a custom analysis that found none: nothing to report
-    ParticleMode& chosen = modes_[analysis.chosen];
-    if (chosen.score < 0.0f) chosen.score = finer_ != nullptr ? finer_->score(chosen.pose) : measure_.score(chosen.pose);
-    finish_step(analysis, chosen.score, out);
+    if (mode_count_ > 0) {  // else a custom analysis that found none: nothing to report
+      ParticleMode& chosen = modes_[analysis.chosen];
+      if (chosen.score < 0.0f) chosen.score = finer_ != nullptr ? finer_->score(chosen.pose) : measure_.score(chosen.pose);
+      finish_step(analysis, chosen.score, out);
+    }
+    charge(FramePhase::kOther, mark);
     return Status::kOk;
   }
 
@@ -430,6 +454,13 @@ class ParticleFilter : public ParticleFilterCore {
   Compensation compensation_;
   Analysis analysis_;
   Proposer* proposer_ = nullptr;
+
+  // Adds the ticks since `mark` to `phase`; the new mark.
+  std::uint64_t charge(FramePhase phase, std::uint64_t mark) noexcept {
+    const std::uint64_t now = read_ticks(clock_);
+    ledger_.add(phase, 0, now - mark);
+    return now;
+  }
 };
 
 }  // namespace gabarit

@@ -148,6 +148,10 @@ class StencilVoteProposer {
   // least 0.5 px and 0.25 deg); the region is the table's range at every
   // depth. Errors: track_step's.
   [[nodiscard]] Status propose(const ImageView& image, const Pose& predicted, ParticleProposals& out) noexcept;
+  // The last proposal's vote in a frame ledger: its work (the features'
+  // and the counter increments, as the session counts them) under kVote,
+  // and the pixels scanned, features and votes.
+  void account(FrameLedger& ledger) const noexcept;
   std::uint64_t votes() const noexcept { return tally_.votes; }
 
  private:

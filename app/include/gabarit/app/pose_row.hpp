@@ -18,14 +18,18 @@ struct TrackRow {
   bool reacquired = false;
   double micros = 0;  // kernel time for this frame
   std::uint64_t work = 0;  // the session's work units for it (SessionResult::work)
-  // The session's frame-cost ledger (frame_ledger.hpp; ticks in nanoseconds
-  // from HostedSession), and the time spent reading the frame before it, in
+  // The session's (or the particle filter's) frame-cost ledger
+  // (frame_ledger.hpp; ticks in nanoseconds, steady_nanoseconds), and the time spent reading the frame before it, in
   // microseconds (decoding, the camera). No session (the plain loop on
   // several threads): has_ledger is false.
   bool has_ledger = false;
   FrameLedger ledger;
   double io_micros = 0;
 };
+
+// The ledger's clock in the host's programs (frame_ledger.hpp's TickSource):
+// nanoseconds of the host's monotonic clock.
+std::uint64_t steady_nanoseconds() noexcept;
 
 // A session's frame as a row: the vote, with the session's pose, state,
 // score and confidence.
