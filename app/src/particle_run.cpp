@@ -31,6 +31,7 @@ ParticleRunOptions particle_run_options(const SessionProfile& profile) {
   o.edge_stride = profile.edge_stride;
   o.edge_tolerance = profile.edge_tolerance;
   o.filter = particle_filter_options(profile.particle_improvements_off);
+  o.filter.mode_clustering = profile.particle_clustering;
   return o;
 }
 

@@ -24,7 +24,8 @@ Status validate(const SessionProfile& p) noexcept {
                        within(p.screen_stride, 1, 16) && within(p.detect_after, 0, 1000) &&
                        within(p.recovery_frames, 0, 1000) && within(p.survey_frames, 0, 1000) &&
                        within(p.particles, 1, 1000000) && within(p.edge_stride, 1, 64) && within(p.edge_tolerance, 0, 3) &&
-                       (p.particle_improvements_off & ~kKnownImprovements) == 0;
+                       (p.particle_improvements_off & ~kKnownImprovements) == 0 &&
+                       static_cast<std::uint8_t>(p.particle_clustering) <= static_cast<std::uint8_t>(ModeClustering::kRunningMean);
   const bool kinds = static_cast<std::uint8_t>(p.recovery) <= static_cast<std::uint8_t>(RecoveryKind::kAuto) &&
                      static_cast<std::uint8_t>(p.subcell) <= static_cast<std::uint8_t>(SubCellKind::kAlignment);
   const bool parts = (p.plain || (!p.motion_filter && !p.refine && !p.recover)) &&
@@ -76,7 +77,8 @@ bool default_numbers(const SessionProfile& p) noexcept {
          p.screen_stride == d.screen_stride && p.detect_after == d.detect_after && p.recovery_frames == d.recovery_frames &&
          p.survey_frames == d.survey_frames && p.particles == d.particles &&
          p.seed == d.seed && p.edge_stride == d.edge_stride && p.edge_tolerance == d.edge_tolerance &&
-         p.particle_improvements_off == d.particle_improvements_off && p.verify_refine == d.verify_refine;
+         p.particle_improvements_off == d.particle_improvements_off && p.verify_refine == d.verify_refine &&
+         p.particle_clustering == d.particle_clustering;
 }
 
 }  // namespace

@@ -51,6 +51,12 @@ RefineBy parse_verify_refine(const std::string& text, const std::string& what) {
   throw UsageError(what + " '" + text + "': want gauss-newton or quadratic");
 }
 
+ModeClustering parse_mode_clustering(const std::string& text, const std::string& what) {
+  if (text == "seed") return ModeClustering::kSeed;
+  if (text == "running-mean") return ModeClustering::kRunningMean;
+  throw UsageError(what + " '" + text + "': want seed or running-mean");
+}
+
 bool parse_bool(const std::string& text, const std::string& what) {
   if (text == "true") return true;
   if (text == "false") return false;
@@ -143,6 +149,11 @@ const Key kKeys[] = {
      [](SessionProfile& p, const std::string& v, const std::string& w) {
        p.particle_improvements_off = v.empty() ? 0u : parse_improvements_off(v, w);
      }},
+    {"mode-clustering",
+     [](const SessionProfile& p) {
+       return std::string(p.particle_clustering == ModeClustering::kRunningMean ? "running-mean" : "seed");
+     },
+     [](SessionProfile& p, const std::string& v, const std::string& w) { p.particle_clustering = parse_mode_clustering(v, w); }},
 };
 
 const Key* find_key(std::string_view name) {
@@ -292,6 +303,10 @@ std::vector<Option> session_option_group() {
                                 "disambiguation, narrowing, kinematics, reinit, mode-filter, velocity," + indent +
                                 "proposals (--tracker particle: half the cloud drawn around the stencil" + indent +
                                 "vote's best cells); all: plain CONDENSATION"},
+      {"--mode-clustering", "seed|running-mean", "how the particle filter groups particles into modes: within the mode" + indent +
+                                                   "radius of a mode's heaviest particle (default), or of its running" + indent +
+                                                   "mean, a new mode only from a particle >= 5% of the heaviest's weight" + indent +
+                                                   "(docs/particle-filter.md compares them)"},
       {"--save-profile", "FILE", "write the profile these options describe (the run goes on)"},
   };
 }
@@ -325,10 +340,12 @@ SessionProfile read_session_profile(const Args& args) {
   number("--edge-stride", "edge-stride");
   number("--edge-tolerance", "edge-tolerance");
   if (args.has("--without")) p.particle_improvements_off = parse_improvements_off(args.get("--without"), "--without");
+  if (args.has("--mode-clustering")) p.particle_clustering = parse_mode_clustering(args.get("--mode-clustering"), "--mode-clustering");
   for (const char* option : {"--detect-after", "--recovery-frames", "--survey-frames"})
     if (p.recovery != RecoveryKind::kDetection && p.recovery != RecoveryKind::kAuto && args.has(option))
       throw UsageError(std::string(option) + " applies to --recovery detect (and auto)");
-  for (const char* option : {"--particles", "--seed", "--without", "--edge-stride", "--edge-tolerance"}) {
+  for (const char* option : {"--particles", "--seed", "--without", "--edge-stride", "--edge-tolerance",
+                             "--mode-clustering"}) {
     if (p.recovery != RecoveryKind::kParticles && args.has(option) && args.get_or("--tracker", "stencil") != "particle")
       throw UsageError(std::string(option) + " applies to --tracker particle and --recovery particle");
   }

@@ -55,7 +55,8 @@ bool valid(const ParticleFilterOptions& o) noexcept {
          o.mode_filter_growth_px < 1.0e6f && unit(o.high_ratio) && unit(o.lost_ratio) && o.lost_ratio <= o.high_ratio &&
          is_finite(o.lost_spread_growth) && o.lost_spread_growth >= 1.0f && o.lost_spread_growth < 100.0f &&
          is_finite(o.lost_spread_max) && o.lost_spread_max >= 1.0f && o.lost_spread_max < 1000.0f &&
-         unit(o.proposal_fraction) && unit(o.proposal_floor);
+         unit(o.proposal_fraction) && unit(o.proposal_floor) && unit(o.mode_seed_ratio) &&
+         static_cast<std::uint8_t>(o.mode_clustering) <= static_cast<std::uint8_t>(ModeClustering::kRunningMean);
 }
 
 ParticleFilterOptions plain_condensation() noexcept {
@@ -165,10 +166,18 @@ std::uint32_t ModeAnalysis::cluster(std::span<const Particle> particles, std::sp
   for (const Particle& p : particles) total += p.weight;
   const float inv_total = total > 0.0f ? 1.0f / total : 0.0f;
 
+  // A mode's sums; theta relative to its seed's, so that the mean of angles
+  // near the seed does not depend on where the angle range is cut.
   struct Sum {
     Pose seed;
     float w = 0, x = 0, y = 0, t = 0;
+    float mean_x = 0, mean_y = 0, mean_t = 0;  // kRunningMean: where the mode is now
     std::uint32_t count = 0;
+    void add(const Particle& p) noexcept {
+      w += p.weight, x += p.weight * p.pose.x, y += p.weight * p.pose.y;
+      t += p.weight * (p.pose.theta_deg - seed.theta_deg);
+      ++count;
+    }
   };
   Sum sums[kMaxParticleModes];
   std::uint32_t mode_count = 0;
@@ -177,35 +186,39 @@ std::uint32_t ModeAnalysis::cluster(std::span<const Particle> particles, std::sp
     std::uint32_t heaviest = 0;
     for (std::uint32_t i = 1; i < n; ++i)
       if (particles[i].weight > particles[heaviest].weight) heaviest = i;
-    Sum& s = sums[0];
-    s.seed = particles[heaviest].pose;
-    for (const Particle& p : particles) {
-      s.w += p.weight, s.x += p.weight * p.pose.x, s.y += p.weight * p.pose.y;
-      s.t += p.weight * (p.pose.theta_deg - s.seed.theta_deg);
-      ++s.count;
-    }
+    sums[0].seed = particles[heaviest].pose;
+    for (const Particle& p : particles) sums[0].add(p);
     mode_count = 1;
   } else {
     sort_by_weight(particles, order);
     const std::uint32_t max_modes = o.max_modes < modes.size() ? o.max_modes : static_cast<std::uint32_t>(modes.size());
     const float irx = 1.0f / o.mode_radius_px, irt = 1.0f / o.mode_radius_deg;
+    const bool running = o.mode_clustering == ModeClustering::kRunningMean;
+    const float seed_weight = o.mode_seed_ratio * particles[order[0]].weight;
     for (std::uint32_t k = 0; k < n; ++k) {
       const Particle& p = particles[order[k]];
       std::uint32_t m = 0;
       for (; m < mode_count; ++m) {
-        const Pose& s = sums[m].seed;
-        if (s.depth != p.pose.depth) continue;
-        const float dx = (p.pose.x - s.x) * irx, dy = (p.pose.y - s.y) * irx, dt = (p.pose.theta_deg - s.theta_deg) * irt;
+        const Sum& s = sums[m];
+        if (s.seed.depth != p.pose.depth) continue;
+        const float cx = running ? s.mean_x : s.seed.x, cy = running ? s.mean_y : s.seed.y;
+        const float ct = running ? s.mean_t : s.seed.theta_deg;
+        const float dx = (p.pose.x - cx) * irx, dy = (p.pose.y - cy) * irx, dt = (p.pose.theta_deg - ct) * irt;
         if (dx * dx + dy * dy + dt * dt <= 1.0f) break;
       }
       if (m == mode_count) {
-        if (mode_count == max_modes) continue;  // beyond the modes kept: counted in no mode
-        sums[mode_count++].seed = p.pose;
+        // Beyond the modes kept, or (kRunningMean) too light to start one: counted in no mode.
+        if (mode_count == max_modes || (running && p.weight < seed_weight)) continue;
+        Sum& fresh = sums[mode_count++];
+        fresh.seed = p.pose;
+        fresh.mean_x = p.pose.x, fresh.mean_y = p.pose.y, fresh.mean_t = p.pose.theta_deg;
       }
       Sum& s = sums[m];
-      s.w += p.weight, s.x += p.weight * p.pose.x, s.y += p.weight * p.pose.y;
-      s.t += p.weight * (p.pose.theta_deg - s.seed.theta_deg);
-      ++s.count;
+      s.add(p);
+      if (running && s.w > 0.0f) {
+        const float iw = 1.0f / s.w;
+        s.mean_x = s.x * iw, s.mean_y = s.y * iw, s.mean_t = s.seed.theta_deg + s.t * iw;
+      }
     }
   }
   for (std::uint32_t m = 0; m < mode_count; ++m) {

@@ -42,6 +42,7 @@ SessionProfile tuned() {
   p.edge_tolerance = 3;
   p.particle_improvements_off = kImproveModes | kImproveReinit | kImproveProposals;
   p.verify_refine = RefineBy::kQuadraticDesign;
+  p.particle_clustering = ModeClustering::kRunningMean;
   return p;
 }
 
@@ -103,6 +104,7 @@ TEST(SessionProfile, ValidateRefusesWhatNoSessionRuns) {
   EXPECT_TRUE(bad([](SessionProfile& p) { p.refine = true; }));  // a part added to the full session
   EXPECT_TRUE(bad([](SessionProfile& p) { p.plain = true, p.recovery = RecoveryKind::kParticles; }));
   EXPECT_TRUE(bad([](SessionProfile& p) { p.recovery = static_cast<RecoveryKind>(4); }));
+  EXPECT_TRUE(bad([](SessionProfile& p) { p.particle_clustering = static_cast<ModeClustering>(2); }));
 }
 
 TEST(SessionProfile, OptionsAreTheKernelsDefaultsAndThePlainLoop) {

@@ -185,6 +185,15 @@ python3 -c 'import json,sys; l=json.load(open(sys.argv[1]))["ledger"]; sys.exit(
   "$s/pstats.json" || fail "the particle filter's ledger: $(cat "$s/pstats.json")"
 $g eval --gt "$s/gt.csv" --poses "$s/pu.csv" | python3 -c 'import json,sys; a=json.load(sys.stdin); sys.exit(a["within_5px"] != a["frames"])' \
   || fail "the particle filter without proposals lost the microscope scene"
+# The thesis's clustering as issue 31 reads it (running means, light
+# particles start no mode) is an option, and holds the scene too.
+$g track --tracker particle --mode-clustering running-mean --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init" -o "$s/pm.csv" \
+  2>/dev/null || fail "track --tracker particle --mode-clustering running-mean"
+cmp -s "$s/pa.csv" "$s/pm.csv" && fail "the particle filter: --mode-clustering running-mean gave the default's poses"
+$g eval --gt "$s/gt.csv" --poses "$s/pm.csv" | python3 -c 'import json,sys; a=json.load(sys.stdin); sys.exit(a["within_5px"] != a["frames"])' \
+  || fail "the particle filter with running-mean modes lost the microscope scene"
+expect 2 "want seed or running-mean" $g track --tracker particle --mode-clustering kmeans --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init"
+expect 2 "applies to --tracker particle" $g track --mode-clustering seed --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init"
 $g track --tracker particle --table "$s/t10.gbt" --frames "$s/frames.y4m" --init "$init" -o "$s/p10e.csv" 2>/dev/null \
   || fail "track --tracker particle on a table without images"
 $g track --tracker particle --measure edges --table "$s/t10.gbt" --frames "$s/frames.y4m" --init "$init" -o "$s/p10f.csv" 2>/dev/null \

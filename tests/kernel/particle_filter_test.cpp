@@ -328,6 +328,43 @@ TEST(ParticleFilter, ClustersSeparatedParticlesIntoModesHeaviestFirst) {
   EXPECT_EQ(modes[0].particles, 10u);  // the heaviest particle seeds the one mode
 }
 
+// The two readings of 3.5.3 differ on a chain of particles and on a light
+// stray: the seed rule measures from a mode's heaviest particle and lets any
+// particle start a mode; the running mean measures from where the mode is
+// now and leaves a particle lighter than mode_seed_ratio of the heaviest in
+// no mode.
+TEST(ParticleFilter, RunningMeanClusteringFollowsTheModeAndIgnoresLightStrays) {
+  ParticleFilterOptions o;  // mode radius 4 px
+  ParticleContext c;
+  c.options = &o;
+  const std::vector<Particle> ps = {{{0.0f, 0.0f, 0.0f, 0}, 1.0f},
+                                    {{3.5f, 0.0f, 0.0f, 0}, 0.9f},   // 3.5 from the seed: joins in both
+                                    {{5.5f, 0.0f, 0.0f, 0}, 0.8f},   // 5.5 from the seed, 3.84 from the mean
+                                    {{40.0f, 0.0f, 0.0f, 0}, 0.5f},  // far and heavy: a mode in both
+                                    {{80.0f, 0.0f, 0.0f, 0}, 0.01f}};  // far and light
+  std::vector<std::uint32_t> order(2 * ps.size());
+  ParticleMode modes[kMaxParticleModes];
+  ModeAnalysis analysis;
+  ASSERT_EQ(o.mode_clustering, ModeClustering::kSeed);
+  ASSERT_EQ(analysis.cluster(ps, order, c, modes), 4u);
+  EXPECT_EQ(modes[0].particles, 2u);
+  EXPECT_NEAR(modes[0].pose.x, 3.5 * 0.9 / 1.9, 1e-5);
+
+  o.mode_clustering = ModeClustering::kRunningMean;
+  o.mode_seed_ratio = 0.05f;
+  ASSERT_TRUE(valid(o));
+  ASSERT_EQ(analysis.cluster(ps, order, c, modes), 2u);
+  EXPECT_EQ(modes[0].particles, 3u);
+  EXPECT_NEAR(modes[0].pose.x, (3.5 * 0.9 + 5.5 * 0.8) / 2.7, 1e-5);
+  EXPECT_NEAR(modes[0].weight, 2.7 / 3.21, 1e-5);  // the stray's weight still counts in the total
+  EXPECT_EQ(modes[1].particles, 1u);
+  EXPECT_NEAR(modes[1].pose.x, 40.0, 1e-6);
+  o.mode_seed_ratio = 0.0f;  // every particle may start a mode
+  EXPECT_EQ(analysis.cluster(ps, order, c, modes), 3u);
+  o.mode_seed_ratio = 1.5f;
+  EXPECT_FALSE(valid(o));
+}
+
 // A finer measure that prefers one place (a measure is any type with these members).
 class PrefersX {
  public:

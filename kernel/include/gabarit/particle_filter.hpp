@@ -28,7 +28,9 @@
 //     assigns each particle to the first of at most kMaxParticleModes modes
 //     whose seed (its heaviest particle) is within the mode radius
 //     ((dx^2 + dy^2) / r_px^2 + dtheta^2 / r_deg^2 <= 1, same depth), or
-//     else seeds a mode of its own: O(n kMaxParticleModes) = O(n);
+//     else seeds a mode of its own: O(n kMaxParticleModes) = O(n); or, with
+//     ModeClustering::kRunningMean, within the radius of a mode's running
+//     mean, only heavy enough particles starting modes;
 //   disambiguation (3.5.4): the heaviest disambiguate_modes modes scored
 //     again by the finer measure; the best of those is the best mode;
 //   narrowing (3.6.1): the diffusion's sigma scales from 1 (no confidence)
@@ -106,6 +108,17 @@ class ParticleRng {
 };
 
 inline constexpr std::uint32_t kMaxParticleModes = 16;
+
+// How the sorted particles are grouped into modes (3.5.3); both one pass in
+// order of weight, O(n * modes):
+//   kSeed: a particle joins the first mode whose seed (its heaviest
+//     particle) is within the mode radius, else seeds a mode of its own;
+//   kRunningMean: as the thesis's eq. 3.4-3.5 are read in issue 31: a
+//     particle joins the first mode whose running weighted mean is within the
+//     radius, and that mean moves to take it in; a particle that joins none
+//     starts a mode only if it is heavy enough (mode_seed_ratio), else it
+//     counts in no mode.
+enum class ModeClustering : std::uint8_t { kSeed, kRunningMean };
 inline constexpr std::uint32_t kMaxParticles = 1u << 20;
 
 // Caller-owned memory for n particles.
@@ -135,9 +148,13 @@ struct ParticleFilterOptions {
   std::uint32_t sharpness = 8;
   // 3.5.3: modes.
   bool modes = true;
+  ModeClustering mode_clustering = ModeClustering::kSeed;
   float mode_radius_px = 4.0f;
   float mode_radius_deg = 3.0f;
   std::uint32_t max_modes = 8;      // 1..kMaxParticleModes
+  // kRunningMean: a particle that joins no mode starts one only if its
+  // weight is at least this share (0..1) of the heaviest particle's.
+  float mode_seed_ratio = 0.05f;
   // 3.5.4: disambiguation of the heaviest modes by the finer measure.
   bool disambiguate = true;
   std::uint32_t disambiguate_modes = 3;
@@ -455,7 +472,7 @@ class ParticleFilter : public ParticleFilterCore {
   Analysis analysis_;
   Proposer* proposer_ = nullptr;
 
-  // Adds the ticks since `mark` to `phase`; the new mark.
+  // Adds the ticks since `mark` to `phase`; returns the reading as the next mark.
   std::uint64_t charge(FramePhase phase, std::uint64_t mark) noexcept {
     const std::uint64_t now = read_ticks(clock_);
     ledger_.add(phase, 0, now - mark);

@@ -86,6 +86,7 @@ struct SessionProfile {
   std::uint32_t edge_stride = 2;
   std::uint32_t edge_tolerance = 0;
   std::uint32_t particle_improvements_off = 0;
+  ModeClustering particle_clustering = ModeClustering::kSeed;
 
   bool operator==(const SessionProfile&) const = default;
 };
