@@ -105,6 +105,7 @@ Accuracy evaluate(const std::vector<PoseSample>& poses, const std::vector<PoseSa
     if (e <= 1.0) ++a.within_1px;
     if (e <= 2.0) ++a.within_2px;
     if (e <= 5.0) ++a.within_5px;
+    a.below_6px += e < 6.0, a.below_12px += e < 12.0, a.above_12px += e > 12.0, a.above_20px += e > 20.0, a.above_40px += e > 40.0;
     if (e > 5.0 && on_target) ++a.failures;
     on_target = e <= 5.0;
     const double de = std::fabs(it->second->theta_deg - t.theta_deg);
@@ -131,7 +132,9 @@ std::string accuracy_json(const Accuracy& a) {
   std::ostringstream o;
   o << "{\n  \"frames\": " << a.frames << ",\n  \"exact\": " << a.exact << ",\n  \"wrong\": " << a.wrong_frames.size()
     << ",\n  \"missing\": " << a.missing << ",\n  \"within_1px\": " << a.within_1px << ",\n  \"within_2px\": " << a.within_2px
-    << ",\n  \"within_5px\": " << a.within_5px << ",\n  \"failures\": " << a.failures
+    << ",\n  \"within_5px\": " << a.within_5px << ",\n  \"below_6px\": " << a.below_6px << ",\n  \"below_12px\": " << a.below_12px
+    << ",\n  \"above_12px\": " << a.above_12px << ",\n  \"above_20px\": " << a.above_20px
+    << ",\n  \"above_40px\": " << a.above_40px << ",\n  \"failures\": " << a.failures
     << ",\n  \"mean_error_px\": " << a.mean_error_px << ",\n  \"max_error_px\": " << a.max_error_px
     << ",\n  \"within_1deg\": " << a.within_1deg << ",\n  \"mean_error_deg\": " << a.mean_error_deg
     << ",\n  \"max_error_deg\": " << a.max_error_deg << ",\n  \"depth_exact\": " << a.depth_exact

@@ -93,6 +93,20 @@ TEST(Evaluation, AngleDepthAndReacquisitionAreMeasured) {
   poses[0].x += 6;   // the first visible frame off: a loss too
   const app::Accuracy lost = app::evaluate(poses, truth);
   EXPECT_EQ(lost.failures, 3u);
+  // Fig. 6.60's buckets, strict at their bounds: of the 9 visible frames,
+  // frames 0 and 10 are 6 px off, the others 0 to 5.5 px.
+  EXPECT_EQ(lost.below_6px, 7u);
+  EXPECT_EQ(lost.below_12px, 9u);
+  EXPECT_EQ(lost.above_12px, 0u);
+  poses[1].x += 12;   // exactly 12: in neither < 12 nor > 12
+  poses[2].x += 20.5;
+  poses[3].x -= 41;
+  const app::Accuracy far = app::evaluate(poses, truth);
+  EXPECT_EQ(far.below_6px, 4u);
+  EXPECT_EQ(far.below_12px, 6u);
+  EXPECT_EQ(far.above_12px, 2u);
+  EXPECT_EQ(far.above_20px, 2u);
+  EXPECT_EQ(far.above_40px, 1u);
 }
 
 // The scene suite: both halves hold every object twice, and each block of 8

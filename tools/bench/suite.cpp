@@ -20,64 +20,13 @@
 #include "gabarit/host/runs/tracking_run.hpp"
 #include "scene_io.hpp"
 #include "suite_ledger.hpp"
+#include "suite_results.hpp"
+#include "suite_section64.hpp"
 
 namespace gabarit::bench {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-std::string fmt(double v, int digits = 1) {
-  char b[64];
-  std::snprintf(b, sizeof b, "%.*f", digits, v);
-  return b;
-}
-
-// One method on one scene.
-struct Measure {
-  double within_1px = 0, within_2px = 0, within_5px = 0, within_1deg = 0;  // % of visible frames
-  double failures_per_100 = 0;  // VOT-style losses of the track (app::Accuracy::failures) per 100 visible frames
-  double depth = -1;            // % depth exact; -1: one depth, or depths not distinguishable
-  int reacquired = 0;           // worst frames to reacquire after an occlusion (-1: never)
-  int reacquired_in_reach = 0;  // the same over occlusions the recovery search can reach (-2: none)
-  double mean_us = 0, p50_us = 0, p99_us = 0, max_us = 0;
-  // The precision of the frames tracked: the mean position error (px) over
-  // the visible frames within 1 px (-1: none).
-  double subpixel_error = -1;
-  // Every method: returns to view (occlusions ending), and those re-acquired
-  // (app::evaluate: within 2 px) within 5 and within 10 frames.
-  int returns = 0, back_within_5 = 0, back_within_10 = 0;
-  // Sessions only: the frames that searched (lost, or re-acquiring) with their mean time.
-  std::size_t search_frames = 0;
-  double search_us = 0;
-  LedgerMeans ledger;  // sessions and the particle filter: the frame-cost ledger's means per frame
-};
-
-// A detector over every frame of a scene, without a starting pose.
-struct DetectionMeasure {
-  bool ran = false;
-  int visible = 0, top1 = 0, top5 = 0;  // true pose within 2 px and 1 deg (and the depth, on tilted stacks)
-  int invisible = 0, false_frames = 0;  // frames without the target, and those with a detection
-  double mean_us = 0;
-};
-
-struct SceneResult {
-  DetectionMeasure detection, opencv_detection;
-  std::uint32_t index = 0;
-  std::string name;
-  host::SceneFamily family = host::SceneFamily::kMixed;
-  bool held_out = false;
-  std::vector<Measure> methods;  // plain, session, then NCC (with the peer), then the particle filter (with particles)
-  std::vector<const char*> names;
-};
-
-constexpr const char* kPlain = "plain loop (thesis)";
-constexpr const char* kSession = "gabarit default session";
-constexpr const char* kNcc = "OpenCV NCC bank";
-// No commas in a method name: the CSV does not quote its fields.
-constexpr const char* kParticle = "particle filter (1000 particles; its default measure: intensity)";
-constexpr const char* kParticleUnguided = "particle filter without vote proposals";
-constexpr const char* kSessionParticles = "default session with particle re-acquisition";
-constexpr const char* kSessionDetection = "default session with re-acquisition by detection";
 
 bool detection_hit(const app::PoseSample& t, const Pose& p, bool depth_counts) {
   const double dt = std::remainder(static_cast<double>(p.theta_deg) - t.theta_deg, 360.0);
@@ -184,6 +133,9 @@ Measure measure(const std::vector<app::PoseSample>& poses, const std::vector<app
     if (e < 1.0) error_sum += e, ++close;
   }
   if (close > 0) m.subpixel_error = error_sum / static_cast<double>(close);
+  m.frames = a.frames, m.mean_error_px = a.mean_error_px, m.timed_frames = micros.size();
+  m.below_6px = a.below_6px, m.below_12px = a.below_12px, m.above_12px = a.above_12px;
+  m.above_20px = a.above_20px, m.above_40px = a.above_40px;
   const host::TimingSummary t = host::summarise_timing(std::move(micros));
   m.mean_us = t.mean;
   m.p50_us = t.p50;
@@ -309,13 +261,6 @@ SceneResult run_scene(std::uint32_t index, std::uint32_t frames_per_scene, const
   return out;
 }
 
-double median(std::vector<double> v) {
-  if (v.empty()) return 0;
-  std::sort(v.begin(), v.end());
-  const std::size_t n = v.size();
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
-
 std::string reacq(int r) { return r == -2 ? "-" : r < 0 ? "never" : std::to_string(r); }
 
 // The bar, scene by scene: the default session within 1 point of a
@@ -340,13 +285,6 @@ void shortfalls_against(const std::vector<SceneResult>& scenes, std::size_t peer
   }
   md << "Default session at least " << scenes[0].names[peer] << "'s figure minus 1 point (1 px, 1 deg, depth) on " << level << " of "
      << scenes.size() << " scenes" << (list.empty() ? "." : "; short on " + list + ".") << "\n\n";
-}
-
-// The index of the method called `name` in every scene's results, or -1.
-int index_of(const std::vector<SceneResult>& scenes, const char* name) {
-  for (std::size_t m = 0; m < scenes[0].names.size(); ++m)
-    if (scenes[0].names[m] == std::string(name)) return static_cast<int>(m);
-  return -1;
 }
 
 // The particle filter, guided by the vote and not: how soon it finds the
@@ -576,8 +514,10 @@ int run_suite(const SuiteOptions& o) {
   md << "## Summary\n\n";
   summary_table(held_out, "Held-out half (never tuned on)", md);
   ledger_table(held_out, "Held-out half", md);
+  section64_table(held_out, "held-out half", md);
   summary_table(tuning, "Tuning half", md);
   ledger_table(tuning, "Tuning half", md);
+  section64_table(tuning, "tuning half", md);
   md << "## Per scene\n\n| # | scene | family | half | method | 1 px | 2 px | 5 px | 1 deg | depth | failures / 100 | reacquired | in reach "
         "| us/frame mean | p50 | p99 | max |\n|---:|---|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
   for (const SceneResult& r : results)

@@ -28,6 +28,8 @@ struct Accuracy {
   std::size_t within_1px = 0;      // Euclidean error <= 1 px
   std::size_t within_2px = 0;
   std::size_t within_5px = 0;
+  // The thesis's error buckets (Fig. 6.60): < 6, < 12, > 12, > 20, > 40 px.
+  std::size_t below_6px = 0, below_12px = 0, above_12px = 0, above_20px = 0, above_40px = 0;
   // Failures (VOT-style): visible frames more than 5 px off whose previous
   // visible frame was within 5 px (or that are the first visible frame):
   // each time the track is lost, counted once.
