@@ -147,7 +147,9 @@ void run_particle_tracking(const TableView& table, app::FrameSource& frames, con
   std::unique_ptr<ParticleTracker> tracker;
   app::GrayImage frame;
   std::uint32_t width = 0, height = 0;
-  for (std::uint32_t index = 0; frames.next(frame); ++index) {
+  for (std::uint32_t index = 0;; ++index) {
+    const auto reading = std::chrono::steady_clock::now();
+    if (!frames.next(frame)) break;
     if (!tracker) {
       width = frame.width, height = frame.height;
       tracker = std::make_unique<ParticleTracker>(table, width, height, options);
@@ -168,8 +170,12 @@ void run_particle_tracking(const TableView& table, app::FrameSource& frames, con
                      : e.state == TrackState::kUncertain ? Confidence::kIntermediate
                                                          : Confidence::kNone;
     row.micros = std::chrono::duration<double, std::micro>(stop - start).count();
+    row.io_micros = std::chrono::duration<double, std::micro>(start - reading).count();
     row.has_ledger = true;
     row.ledger = tracker->core().ledger();
+    // The frame's vote is the proposals' (none without a proposer).
+    row.step.features = static_cast<std::uint32_t>(row.ledger.features);
+    row.step.votes = row.ledger.votes;
     on_row(row);
   }
 }

@@ -181,7 +181,8 @@ cmp -s "$s/pa.csv" "$s/pu.csv" && fail "the particle filter: --without proposals
 # Its frame-cost ledger (--stats): the proposals' vote, the measure, the rest.
 $g track --tracker particle --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init" --stats "$s/pstats.json" -o "$s/pa2.csv" 2>/dev/null \
   || fail "track --tracker particle --stats"
-python3 -c 'import json,sys; l=json.load(open(sys.argv[1]))["ledger"]; sys.exit(not (l["vote"]["work_per_frame"] > 0 and l["verify"]["us_per_frame"] > 0 and l["correlations_per_frame"] >= 1000))' \
+# The summary's features and votes are the proposals' vote, and frame reading is timed.
+python3 -c 'import json,sys; j=json.load(open(sys.argv[1])); l=j["ledger"]; sys.exit(not (l["vote"]["work_per_frame"] > 0 and l["verify"]["us_per_frame"] > 0 and l["correlations_per_frame"] >= 1000 and j["features_per_frame"] == l["features_per_frame"] > 0 and j["votes_per_frame"] == l["votes_per_frame"] > 0 and l["io"]["us_per_frame"] > 0))' \
   "$s/pstats.json" || fail "the particle filter's ledger: $(cat "$s/pstats.json")"
 $g eval --gt "$s/gt.csv" --poses "$s/pu.csv" | python3 -c 'import json,sys; a=json.load(sys.stdin); sys.exit(a["within_5px"] != a["frames"])' \
   || fail "the particle filter without proposals lost the microscope scene"
