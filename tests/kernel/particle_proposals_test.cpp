@@ -233,6 +233,15 @@ TEST(ParticleFilter, TheLedgerChargesTheVoteTheLoaderTheMeasureAndTheRest) {
     EXPECT_GT(l.ticks[static_cast<int>(p)], 0u) << frame_phase_name(p);
   EXPECT_EQ(l.ticks[static_cast<int>(FramePhase::kRecovery)], 0u);
   EXPECT_EQ(l.total_ticks(), g_ticks - before - 1) << "every tick between the first reading and the last, once";
+  // Without disambiguation no mode is scored by the finer measure before the
+  // choice: the chosen one is scored then, and counted.
+  ParticleFilterOptions plain_modes;
+  plain_modes.disambiguate = false;
+  EdgeParticleFilter undisambiguated(coarse, &fine, &loader);
+  ASSERT_EQ(undisambiguated.start(plain_modes, {80, 80, 0, 0}, 1, 3, {cloud, next, order}), Status::kOk);
+  ASSERT_EQ(undisambiguated.step(s.frame(81, 80, 0.5f).view(), e), Status::kOk);
+  ASSERT_GT(e.modes, 0u);
+  EXPECT_EQ(undisambiguated.ledger().correlations, 200u + 1u) << "every particle, the chosen mode";
 }
 
 }  // namespace

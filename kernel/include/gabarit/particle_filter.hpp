@@ -456,7 +456,12 @@ class ParticleFilter : public ParticleFilterCore {
     out.modes = mode_count_;
     if (mode_count_ > 0) {  // else a custom analysis that found none: nothing to report
       ParticleMode& chosen = modes_[analysis.chosen];
-      if (chosen.score < 0.0f) chosen.score = finer_ != nullptr ? finer_->score(chosen.pose) : measure_.score(chosen.pose);
+      if (chosen.score < 0.0f) {  // not among the modes scored above: one more score, charged as theirs
+        mark = charge(FramePhase::kOther, mark);
+        chosen.score = finer_ != nullptr ? finer_->score(chosen.pose) : measure_.score(chosen.pose);
+        ++ledger_.correlations;
+        mark = charge(FramePhase::kVerify, mark);
+      }
       finish_step(analysis, chosen.score, out);
     }
     charge(FramePhase::kOther, mark);
