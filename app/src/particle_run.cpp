@@ -48,7 +48,7 @@ struct ParticleTracker::Parts {
         options(resolved(o, t)),
         detector(o.detector ? *o.detector : detector_of(t)),
         bits(edge_map_words(w, h)),
-        features(std::size_t{w} * 16),  // strips of 16 rows
+        features(edge_map_features(w)),
         loader(detector, bits, features, static_cast<std::uint16_t>(w), static_cast<std::uint16_t>(h)),
         edges(t, loader, o.edge_stride, o.edge_tolerance),
         fine(t, loader, 1, o.edge_tolerance),

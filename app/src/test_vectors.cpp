@@ -4,6 +4,8 @@
 
 #include "gabarit/byte_order.hpp"
 #include "gabarit/crc32.hpp"
+#include "gabarit/particle_measures.hpp"
+#include "gabarit/particle_recovery.hpp"
 
 namespace gabarit::vectors {
 namespace {
@@ -36,6 +38,13 @@ constexpr Field kSessionFields[] = {
     {"confidence", kRecordBytes + 14, 1},    {"session_state", kRecordBytes + 15, 1},
     {"session_score", kRecordBytes + 16, 4}, {"reacquired", kRecordBytes + 20, 1},
     {"searched_coarse", kRecordBytes + 21, 1},
+};
+
+// A particle record's fields (see encode_particle_record).
+constexpr Field kParticleFields[] = {
+    {"x", 0, 4},      {"y", 4, 4},          {"theta_deg", 8, 4},       {"depth", 12, 2},
+    {"state", 14, 1}, {"flags", 15, 1},     {"score", 16, 4},          {"modes", 20, 4},
+    {"mode_particles", 24, 4},              {"proposed", 28, 4},
 };
 
 std::uint64_t load_field(const std::byte* record, const Field& f) noexcept {
@@ -260,6 +269,90 @@ Status check_vectors(const TableView& table, const VectorSet& set, TrackerScratc
     if (first_difference(expected, actual, kFields, i, report)) return Status::kOk;
     report.frames_checked = i + 1;
     pose = step.pose;
+  }
+  return Status::kOk;
+}
+
+Status open_particle_vectors(std::span<const std::byte> bytes, ParticleVectorSet& out) noexcept {
+  if (bytes.size() < kParticleHeaderBytes + kTrailerBytes) return Status::kTruncated;
+  if (std::memcmp(bytes.data(), kParticleMagic, sizeof(kParticleMagic)) != 0) return Status::kBadMagic;
+  const std::byte* p = bytes.data();
+  ParticleVectorSet set;
+  const bool common_ok = load_common(p, set);
+  const std::uint8_t flags = std::to_integer<std::uint8_t>(p[21]);
+  set.finer = (flags & 1u) != 0;
+  set.proposals = load_le<std::uint16_t>(p + 38);
+  set.particles = load_le<std::uint32_t>(p + 40);
+  set.edge_stride = load_le<std::uint32_t>(p + 44);
+  set.edge_tolerance = load_le<std::uint32_t>(p + 48);
+  set.seed = load_le<std::uint64_t>(p + 56);
+  // The frame's sides are the edge map's window: at most 65535 (u16) each.
+  const bool filter_ok = set.particles >= 1 && set.particles <= kMaxVectorParticles && set.proposals <= kMaxParticleProposals &&
+                         set.edge_stride >= 1 && set.edge_stride <= 64 && set.edge_tolerance <= 3;
+  if (!common_ok || (flags & ~1u) != 0 || !filter_ok || load_le<std::uint32_t>(p + 52) != 0) return Status::kBadHeaderField;
+  GABARIT_TRY(check_size_and_crc(bytes, particle_file_bytes(set.frame_count, set.width, set.height)));
+  const std::size_t pixels = std::size_t{set.frame_count} * set.width * set.height;
+  set.frames = bytes.subspan(kParticleHeaderBytes, pixels);
+  set.expected = bytes.subspan(kParticleHeaderBytes + pixels, std::size_t{set.frame_count} * kParticleRecordBytes);
+  out = set;
+  return Status::kOk;
+}
+
+void encode_particle_header(const ParticleVectorSet& set, std::span<std::byte, kParticleHeaderBytes> out) noexcept {
+  std::byte* p = out.data();
+  std::memset(p, 0, kParticleHeaderBytes);
+  store_common(p, kParticleMagic, set.frame_count, set.width, set.height, set.detector, set.init);
+  p[21] = static_cast<std::byte>(set.finer ? 1u : 0u);
+  store_le<std::uint16_t>(p + 38, static_cast<std::uint16_t>(set.proposals));
+  store_le<std::uint32_t>(p + 40, set.particles);
+  store_le<std::uint32_t>(p + 44, set.edge_stride);
+  store_le<std::uint32_t>(p + 48, set.edge_tolerance);
+  store_le<std::uint64_t>(p + 56, set.seed);
+}
+
+void encode_particle_record(const ParticleEstimate& e, std::span<std::byte, kParticleRecordBytes> out) noexcept {
+  std::byte* p = out.data();
+  std::memset(p, 0, kParticleRecordBytes);
+  store_le<std::uint32_t>(p + 0, float_bits(e.pose.x));
+  store_le<std::uint32_t>(p + 4, float_bits(e.pose.y));
+  store_le<std::uint32_t>(p + 8, float_bits(e.pose.theta_deg));
+  store_le<std::uint16_t>(p + 12, e.pose.depth);
+  p[14] = static_cast<std::byte>(e.state);
+  p[15] = static_cast<std::byte>((e.held ? 1u : 0u) | (e.reinitialised ? 2u : 0u));
+  store_le<std::uint32_t>(p + 16, float_bits(e.score));
+  store_le<std::uint32_t>(p + 20, e.modes);
+  store_le<std::uint32_t>(p + 24, e.mode_particles);
+  store_le<std::uint32_t>(p + 28, e.proposed);
+}
+
+Status check_particle_vectors(const TableView& table, const ParticleVectorSet& set, ParticleVectorScratch scratch,
+                              Report& report) noexcept {
+  report = Report{};
+  const ParticleScratch& ps = scratch.particles;
+  if (ps.cloud.size() < particle_scratch_particles(set.particles) || ps.next.size() < particle_scratch_particles(set.particles) ||
+      ps.order.size() < particle_scratch_order(set.particles) || scratch.edge_bits.size() < edge_map_words(set.width, set.height) ||
+      scratch.edge_features.size() < edge_map_features(set.width) || set.width > 65535 || set.height > 65535) {
+    return Status::kBufferTooSmall;
+  }
+  // The composition app::ParticleTracker builds on the heap, on the caller's memory.
+  EdgeMapLoader loader(set.detector, scratch.edge_bits.first(edge_map_words(set.width, set.height)),
+                       scratch.edge_features.first(edge_map_features(set.width)), static_cast<std::uint16_t>(set.width),
+                       static_cast<std::uint16_t>(set.height));
+  EdgeCorrelationMeasure edges(table, loader, set.edge_stride, set.edge_tolerance);
+  EdgeCorrelationMeasure fine(table, loader, 1, set.edge_tolerance);
+  EdgeParticleFilter filter(edges, set.finer ? &fine : nullptr, &loader);
+  StencilVoteProposer proposer(table, set.detector, scratch.proposer, set.proposals > 0 ? set.proposals : 1);
+  if (set.proposals > 0) filter.propose_with(&proposer);
+  GABARIT_TRY(filter.start(ParticleFilterOptions{}, set.init, table.depth_count(), set.seed,
+                           {ps.cloud.first(set.particles), ps.next.first(set.particles), ps.order}));
+  for (std::uint32_t i = 0; i < set.frame_count; ++i) {
+    ParticleEstimate estimate;
+    GABARIT_TRY(filter.step(set.frame(i), estimate));
+    std::byte actual[kParticleRecordBytes];
+    encode_particle_record(estimate, std::span<std::byte, kParticleRecordBytes>(actual));
+    const std::byte* expected = set.expected.data() + std::size_t{i} * kParticleRecordBytes;
+    if (first_difference(expected, actual, kParticleFields, i, report)) return Status::kOk;
+    report.frames_checked = i + 1;
   }
   return Status::kOk;
 }

@@ -1,13 +1,15 @@
-// gabarit-vector-replay TABLE VECTORS [SESSION ...]: replays the cross-target
-// test vectors (and session vectors) on this machine (x86-64, or aarch64/armhf
-// under qemu-user) and exits 0 only if every pose and vote count is
-// bit-identical to the host's.
+// gabarit-vector-replay TABLE VECTORS [SESSION|PARTICLE ...]: replays the
+// cross-target test vectors (and session and particle vectors, told apart by
+// their magic) on this machine (x86-64, or aarch64/armhf under qemu-user)
+// and exits 0 only if every pose and vote count is bit-identical to the host's.
 #include <cstdio>
 #include <cstring>
+#include <span>
 #include <utility>
 #include <vector>
 
 #include "gabarit/app/test_vectors.hpp"
+#include "gabarit/particle_measures.hpp"
 #include "gabarit/recovery_search.hpp"
 #include "gabarit/table_view.hpp"
 #include "gabarit/tracker.hpp"
@@ -25,11 +27,39 @@ bool read_file(const char* path, std::vector<std::byte>& out) {
   return ok;
 }
 
+// Replays particle vectors (particle.gbp): 0 when every estimate is the host's.
+int replay_particles(const gabarit::TableView& table, const char* path, std::span<const std::byte> bytes,
+                     gabarit::TrackerScratch proposer) {
+  gabarit::vectors::ParticleVectorSet set;
+  if (auto s = gabarit::vectors::open_particle_vectors(bytes, set); s != gabarit::Status::kOk) {
+    std::fprintf(stderr, "gabarit-vector-replay: %s: %s\n", path, gabarit::status_name(s));
+    return 1;
+  }
+  std::vector<gabarit::Particle> cloud(gabarit::particle_scratch_particles(set.particles)), next(cloud.size());
+  std::vector<std::uint32_t> order(gabarit::particle_scratch_order(set.particles));
+  std::vector<std::uint64_t> bits(gabarit::edge_map_words(set.width, set.height));
+  std::vector<gabarit::RoiPoint> edge_features(gabarit::edge_map_features(set.width));
+  gabarit::vectors::Report report;
+  if (auto s = gabarit::vectors::check_particle_vectors(table, set, {{cloud, next, order}, bits, edge_features, proposer}, report);
+      s != gabarit::Status::kOk) {
+    std::fprintf(stderr, "gabarit-vector-replay: %s: particle filter: %s\n", path, gabarit::status_name(s));
+    return 1;
+  }
+  if (!report.match) {
+    std::printf("FAIL: %s: particle frame %u field %s: expected 0x%llx, got 0x%llx\n", path, report.frame, report.field,
+                static_cast<unsigned long long>(report.expected), static_cast<unsigned long long>(report.actual));
+    return 1;
+  }
+  std::printf("PASS: particle tracker, %u frames %ux%u, %u particles, seed %llu: estimates bit-identical to the host\n",
+              report.frames_checked, set.width, set.height, set.particles, static_cast<unsigned long long>(set.seed));
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   if (argc < 3) {
-    std::fprintf(stderr, "usage: gabarit-vector-replay TABLE.gbt VECTORS.gbv [SESSION.gbs ...]   (from `gabarit vectors`)\n");
+    std::fprintf(stderr, "usage: gabarit-vector-replay TABLE.gbt VECTORS.gbv [SESSION.gbs|PARTICLE.gbp ...]   (from `gabarit vectors`)\n");
     return 2;
   }
   std::vector<std::byte> table_bytes, vector_bytes;
@@ -76,6 +106,11 @@ int main(int argc, char** argv) {
     if (!read_file(argv[i], session_bytes)) {
       std::fprintf(stderr, "gabarit-vector-replay: cannot read %s\n", argv[i]);
       return 1;
+    }
+    if (session_bytes.size() >= sizeof(gabarit::vectors::kParticleMagic) &&
+        std::memcmp(session_bytes.data(), gabarit::vectors::kParticleMagic, sizeof(gabarit::vectors::kParticleMagic)) == 0) {
+      if (replay_particles(table, argv[i], session_bytes, {features, counters, mask}) != 0) return 1;
+      continue;
     }
     if (auto s = gabarit::vectors::open_session_vectors(session_bytes, session); s != gabarit::Status::kOk) {
       std::fprintf(stderr, "gabarit-vector-replay: %s: %s\n", argv[i], gabarit::status_name(s));

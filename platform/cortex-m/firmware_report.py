@@ -20,7 +20,8 @@ would be unknown). A lambda is shown as its enclosing function followed by
 does not read as recursion.
 
 Memory: flash and RAM used, from the linker map's output sections, and the
-share of flash taken by the embedded table, test vectors and session vectors.
+share of flash taken by the embedded table, test vectors, session vectors and
+particle vectors.
 Exit status 0 when everything is within budget, 1 otherwise.
 """
 import argparse
@@ -234,12 +235,14 @@ def main():
     table = symbols.get("gabarit_table_end", 0) - symbols.get("gabarit_table", 0)
     vectors = symbols.get("gabarit_vectors_end", 0) - symbols.get("gabarit_vectors", 0)
     session = symbols.get("gabarit_session_end", 0) - symbols.get("gabarit_session", 0)
+    particle = symbols.get("gabarit_particle_end", 0) - symbols.get("gabarit_particle", 0)
     print("\n## Memory (from the linker map)\n")
     print("| region | used | budget | share |")
     print("|---|---:|---:|---:|")
     print(f"| flash | {flash} | {args.flash_budget} | {100.0 * flash / args.flash_budget:.1f}% |")
     print(f"| RAM | {ram} | {args.ram_budget} | {100.0 * ram / args.ram_budget:.1f}% |")
-    print(f"\nflash: code {size('.text')} B, table {table} B, test vectors {vectors} B, session vectors {session} B; "
+    print(f"\nflash: code {size('.text')} B, table {table} B, test vectors {vectors} B, session vectors {session} B, "
+          f"particle vectors {particle} B; "
           f"RAM: static buffers (.bss) {size('.bss')} B, stack {size('.stack')} B")
 
     if need > stack_budget:

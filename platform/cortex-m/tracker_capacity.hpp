@@ -1,12 +1,14 @@
 // The largest table the firmware images' RAM is sized for: a ROI of up to
 // kMaxRoiSide x kMaxRoiSide pixels centred on the reference point and up to
-// kMaxCells cells. Each image's static buffers use these sizes, computed by
-// the kernel's constexpr formulas, and refuse a bigger table at start-up.
+// kMaxCells cells; and the particle tracker's cloud and frame below. Each
+// image's static buffers use these sizes, computed by the kernel's constexpr
+// formulas, and refuse a bigger table (or cloud, or frame) at start-up.
 #pragma once
 
 #include <cstddef>
 #include <cstdint>
 
+#include "gabarit/particle_measures.hpp"
 #include "gabarit/table_view.hpp"
 #include "gabarit/tracker.hpp"
 #include "gabarit/voter.hpp"
@@ -21,6 +23,14 @@ inline constexpr std::size_t kMaskBytes = tracker_mask_bytes(kMaxRoiSide, kMaxRo
 inline constexpr std::size_t kCounterCount = voter_counter_count(kMaxCells);
 // The Canny detector's rows of magnitudes (each pixel's gradient computed once).
 inline constexpr std::size_t kMagnitudeEntries = tracker_magnitude_entries(kMaxRoiSide, kMaxRoiSide, kMaxRoiOrigin, kMaxRoiOrigin);
+
+// The particle tracker's replay (particle.gbp): up to kMaxParticles
+// particles (gabarit track --tracker particle's default count) on frames of
+// up to kMaxParticleFrameSide pixels a side, whose edge map it holds whole.
+inline constexpr std::uint32_t kMaxParticles = 1000;
+inline constexpr std::uint32_t kMaxParticleFrameSide = 256;
+inline constexpr std::size_t kEdgeMapWords = edge_map_words(kMaxParticleFrameSide, kMaxParticleFrameSide);
+inline constexpr std::size_t kEdgeMapFeatures = edge_map_features(kMaxParticleFrameSide);
 
 inline bool table_fits(const TableView& table) noexcept {
   return tracker_feature_capacity(table) <= kFeatureCapacity && table.cell_count() <= kMaxCells &&

@@ -1,8 +1,9 @@
 // The firmware's application: validate the table linked into flash once,
 // then replay the embedded test vectors through the kernel's tracker (or the
 // session vectors through a TrackingSession: motion filter, refinement,
-// recovery, depth and angle by intensity) and report whether every pose and
-// vote count is bit-identical to the host's.
+// recovery, depth and angle by intensity; or the particle vectors through
+// the particle tracker gabarit track --tracker particle runs) and report
+// whether every pose and vote count is bit-identical to the host's.
 // All buffers are static and sized by the kernel's constexpr functions for
 // the largest table this firmware accepts; a bigger table is refused at
 // start-up, never overrun.
@@ -21,6 +22,7 @@ extern "C" {
 extern const std::byte gabarit_table[], gabarit_table_end[];
 extern const std::byte gabarit_vectors[], gabarit_vectors_end[];
 extern const std::byte gabarit_session[], gabarit_session_end[];
+extern const std::byte gabarit_particle[], gabarit_particle_end[];
 }
 
 namespace {
@@ -38,6 +40,12 @@ std::uint8_t g_roi_mask[kMaskBytes];
 std::uint16_t g_magnitudes[gabarit::mcu::kMagnitudeEntries];
 // The session vectors' focus stack: views of images in flash.
 gabarit::ImageView g_stack_views[gabarit::vectors::kMaxStackDepths];
+// The particle tracker's cloud, its radix sort's indices and the frame's edge map.
+gabarit::Particle g_cloud[gabarit::particle_scratch_particles(gabarit::mcu::kMaxParticles)];
+gabarit::Particle g_next[gabarit::particle_scratch_particles(gabarit::mcu::kMaxParticles)];
+std::uint32_t g_order[gabarit::particle_scratch_order(gabarit::mcu::kMaxParticles)];
+std::uint64_t g_edge_bits[gabarit::mcu::kEdgeMapWords];
+gabarit::RoiPoint g_edge_features[gabarit::mcu::kEdgeMapFeatures];
 
 std::span<const std::byte> between(const std::byte* begin, const std::byte* end) {
   return {begin, static_cast<std::size_t>(end - begin)};
@@ -54,6 +62,34 @@ int mismatch(const char* what, const gabarit::vectors::Report& report) {
   console_write(line.text("FAIL: ").text(what).text(" frame ").dec(std::uint64_t{report.frame}).text(" field ")
                     .text(report.field).text(": expected ").hex(report.expected).text(", got ").hex(report.actual));
   return 1;
+}
+
+// The particle vectors: the table's tracker scratch serves the proposals' vote.
+int replay_particles(const gabarit::TableView& table, gabarit::TrackerScratch scratch) {
+  gabarit::vectors::ParticleVectorSet set;
+  if (const auto s = gabarit::vectors::open_particle_vectors(between(gabarit_particle, gabarit_particle_end), set);
+      s != gabarit::Status::kOk)
+    return fail("particle vectors", s);
+  if (set.particles > gabarit::mcu::kMaxParticles || set.width > gabarit::mcu::kMaxParticleFrameSide ||
+      set.height > gabarit::mcu::kMaxParticleFrameSide) {
+    Line line;
+    console_write(line.text("FAIL: the particle vectors need ").dec(std::uint64_t{set.particles}).text(" particles on ")
+                      .dec(std::uint64_t{set.width}).text("x").dec(std::uint64_t{set.height}).text(" frames; this firmware has ")
+                      .dec(std::uint64_t{gabarit::mcu::kMaxParticles}).text(" and ")
+                      .dec(std::uint64_t{gabarit::mcu::kMaxParticleFrameSide}).text(" a side"));
+    return 1;
+  }
+  gabarit::vectors::Report report;
+  const gabarit::vectors::ParticleVectorScratch particle_scratch{{g_cloud, g_next, g_order}, g_edge_bits, g_edge_features, scratch};
+  if (const auto s = gabarit::vectors::check_particle_vectors(table, set, particle_scratch, report); s != gabarit::Status::kOk)
+    return fail("particle filter", s);
+  if (!report.match) return mismatch("particle", report);
+  Line result;
+  console_write(result.text("PASS: particle tracker, ").dec(std::uint64_t{report.frames_checked}).text(" frames ")
+                    .dec(std::uint64_t{set.width}).text("x").dec(std::uint64_t{set.height}).text(", ")
+                    .dec(std::uint64_t{set.particles}).text(" particles, seed ").dec(set.seed)
+                    .text(": estimates bit-identical to the host"));
+  return 0;
 }
 
 }  // namespace
@@ -116,5 +152,6 @@ extern "C" int app_main() {
                       .dec(std::uint64_t{set.stack_depths})
                       .text(" focus-stack images: poses, confidence and votes bit-identical to the host"));
   }
+  if (!between(gabarit_particle, gabarit_particle_end).empty()) return replay_particles(table, scratch);
   return 0;
 }

@@ -194,8 +194,9 @@ TEST(ParticleFilter, VoteProposalsReacquireWithinAFewFrames) {
     without += b.frames < 0 ? 17 : b.frames;
   }
   EXPECT_LT(with, without) << "proposals re-acquire sooner than diffusion";
-  // The same bits on every target (the kernel tests run on x86-64, aarch64,
-  // armhf and the Cortex-M builds): the digest measured on x86-64.
+  // The same bits on every target (the kernel tests run on x86-64, aarch64
+  // and armhf; the Cortex-M builds replay particle.gbp, ctest
+  // firmware.particle): the digest measured on x86-64.
   const Reacquisition a = reacquire(s, 4, 1), b = reacquire(s, 4, 1);
   EXPECT_EQ(a.crc, b.crc);
   EXPECT_EQ(a.crc, 1608966699u) << "proposals digest";

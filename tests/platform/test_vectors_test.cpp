@@ -15,6 +15,7 @@
 #include "gabarit/crc32.hpp"
 #include "gabarit/host/scenes/test_vector_scene.hpp"
 #include "gabarit/host/runs/tracking_run.hpp"
+#include "gabarit/particle_measures.hpp"
 
 namespace gabarit {
 namespace {
@@ -44,6 +45,7 @@ class TestVectors : public ::testing::Test {
     o.session_frames = 14;
     o.hidden_from = 3;
     o.hidden_frames = 8;
+    o.particles = 300;
     summary_ = host::write_test_vectors(o, (dir_ / "a").string());
     host::write_test_vectors(o, (dir_ / "b").string());
   }
@@ -82,6 +84,21 @@ class TestVectors : public ::testing::Test {
     return vectors::check_session_vectors(table, set, buffers.scratch(), stack, report);
   }
 
+  // Replays particle `file` on the host against table a/table.gbt, with
+  // scratch for `particles` particles.
+  static Status replay_particles(const std::vector<std::byte>& file, vectors::Report& report, std::uint32_t particles = 300) {
+    AlignedTable aligned;
+    const TableView& table = aligned.view;
+    vectors::ParticleVectorSet set;
+    GABARIT_TRY(vectors::open_particle_vectors(file, set));
+    std::vector<Particle> cloud(particle_scratch_particles(particles)), next(particle_scratch_particles(particles));
+    std::vector<std::uint32_t> order(particle_scratch_order(particles));
+    std::vector<std::uint64_t> bits(edge_map_words(set.width, set.height));
+    std::vector<RoiPoint> features(edge_map_features(set.width));
+    app::TrackerBuffers buffers(table, app::VoterChoice::kCsr);
+    return vectors::check_particle_vectors(table, set, {{cloud, next, order}, bits, features, buffers.scratch()}, report);
+  }
+
   static inline std::filesystem::path dir_;
   static inline host::VectorSceneSummary summary_;
 };
@@ -91,6 +108,7 @@ TEST_F(TestVectors, SameOptionsWriteTheSameBytes) {
   EXPECT_EQ(read_bytes(dir_ / "a" / "vectors.gbv"), read_bytes(dir_ / "b" / "vectors.gbv"));
   EXPECT_EQ(read_bytes(dir_ / "a" / "session.gbs"), read_bytes(dir_ / "b" / "session.gbs"));
   EXPECT_EQ(read_bytes(dir_ / "a" / "session-screened.gbs"), read_bytes(dir_ / "b" / "session-screened.gbs"));
+  EXPECT_EQ(read_bytes(dir_ / "a" / "particle.gbp"), read_bytes(dir_ / "b" / "particle.gbp"));
 }
 
 // The session's sequence exercises what the session adds: the target is
@@ -199,6 +217,68 @@ TEST_F(TestVectors, DamagedFilesAreRefused) {
   auto zero_frames = good;
   store_le<std::uint32_t>(zero_frames.data() + 8, 0);
   EXPECT_EQ(vectors::open_vectors(zero_frames, set), Status::kBadHeaderField);
+}
+
+// particle.gbp was recorded with app::ParticleTracker (what gabarit track
+// --tracker particle runs); the replay composes the kernel's filter on the
+// caller's memory, as the firmware does, and must give the same bits.
+TEST_F(TestVectors, TheParticleTrackerReplaysExactlyThroughTheOcclusion) {
+  EXPECT_GT(summary_.particle_frames_tracking, 0u);
+  EXPECT_LT(summary_.particle_frames_tracking, 14u) << "the hidden frames are not tracking";
+  const auto file = read_bytes(dir_ / "a" / "particle.gbp");
+  vectors::ParticleVectorSet set;
+  ASSERT_EQ(vectors::open_particle_vectors(file, set), Status::kOk);
+  EXPECT_EQ(set.particles, 300u);
+  EXPECT_EQ(set.proposals, 4u);
+  EXPECT_TRUE(set.finer);
+  vectors::Report report;
+  ASSERT_EQ(replay_particles(file, report), Status::kOk);
+  EXPECT_TRUE(report.match) << "frame " << report.frame << " field " << report.field;
+  EXPECT_EQ(report.frames_checked, 14u);
+  // Short of memory for the file's particles: refused, not overrun.
+  EXPECT_EQ(replay_particles(file, report, 299), Status::kBufferTooSmall);
+}
+
+TEST_F(TestVectors, ADifferentParticleEstimateIsReportedWithFrameAndField) {
+  std::vector<std::byte> file = read_bytes(dir_ / "a" / "particle.gbp");
+  vectors::ParticleVectorSet set;
+  ASSERT_EQ(vectors::open_particle_vectors(file, set), Status::kOk);
+  // Frame 1's score (record offset 16), one ulp off.
+  const std::size_t at = static_cast<std::size_t>(set.expected.data() - file.data()) + vectors::kParticleRecordBytes + 16;
+  store_le<std::uint32_t>(file.data() + at, load_le<std::uint32_t>(file.data() + at) ^ 1u);
+  reseal(file);
+  vectors::Report report;
+  ASSERT_EQ(replay_particles(file, report), Status::kOk);
+  EXPECT_FALSE(report.match);
+  EXPECT_EQ(report.frame, 1u);
+  EXPECT_STREQ(report.field, "score");
+  EXPECT_EQ(report.frames_checked, 1u);
+}
+
+TEST_F(TestVectors, DamagedParticleFilesAreRefused) {
+  const std::vector<std::byte> good = read_bytes(dir_ / "a" / "particle.gbp");
+  vectors::ParticleVectorSet set;
+  auto flipped = good;
+  flipped[vectors::kParticleHeaderBytes + 100] ^= std::byte{0x01};
+  EXPECT_EQ(vectors::open_particle_vectors(flipped, set), Status::kBadChecksum);
+  EXPECT_EQ(vectors::open_particle_vectors(std::span(good).first(good.size() - 1), set), Status::kTruncated);
+  const auto header_field = [&](std::size_t offset, std::uint32_t value, std::size_t bytes) {
+    auto bad = good;
+    if (bytes == 1) bad[offset] = static_cast<std::byte>(value);
+    if (bytes == 2) store_le<std::uint16_t>(bad.data() + offset, static_cast<std::uint16_t>(value));
+    if (bytes == 4) store_le<std::uint32_t>(bad.data() + offset, value);
+    reseal(bad);
+    return vectors::open_particle_vectors(bad, set);
+  };
+  EXPECT_EQ(header_field(21, 2, 1), Status::kBadHeaderField) << "unknown flag";
+  EXPECT_EQ(header_field(38, 9, 2), Status::kBadHeaderField) << "proposals over 8";
+  EXPECT_EQ(header_field(40, 0, 4), Status::kBadHeaderField) << "no particles";
+  EXPECT_EQ(header_field(40, vectors::kMaxVectorParticles + 1, 4), Status::kBadHeaderField) << "too many particles";
+  EXPECT_EQ(header_field(44, 0, 4), Status::kBadHeaderField) << "stride 0";
+  EXPECT_EQ(header_field(48, 4, 4), Status::kBadHeaderField) << "tolerance over 3";
+  EXPECT_EQ(header_field(52, 1, 4), Status::kBadHeaderField) << "reserved";
+  EXPECT_EQ(header_field(40, 301, 4), Status::kOk) << "the header's own check passes; the replay then needs more scratch";
+  EXPECT_EQ(vectors::open_particle_vectors(read_bytes(dir_ / "a" / "session.gbs"), set), Status::kBadMagic);
 }
 
 }  // namespace

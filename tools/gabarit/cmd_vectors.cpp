@@ -12,8 +12,9 @@ int vectors(const std::vector<std::string>& argv) {
             "Writes the cross-target test vectors: DIR/table.gbt (a 4-DOF table: x, y +-6 px in 2-px cells,\n"
             "theta +-3 deg in 2-deg cells, every focus-stack depth), DIR/vectors.gbv (frames plus the host's\n"
             "track_step results) and DIR/session.gbs (a longer sequence with an occlusion, the focus stack and a\n"
-            "TrackingSession's results: motion filter, refinement, recovery, depth and angle by intensity), both in\n"
-            "docs/file-formats.md. Every target replays them and must match bit for bit. Same options, same bytes.",
+            "TrackingSession's results: motion filter, refinement, recovery, depth and angle by intensity), its twin\n"
+            "DIR/session-screened.gbs, and DIR/particle.gbp (the session's sequence through gabarit track --tracker\n"
+            "particle's defaults on that table: every frame's estimate), all in docs/file-formats.md. Every target replays them and must match bit for bit. Same options, same bytes.",
             {{"--out", "DIR", "output directory", false, true},
              {"--points", "N", "approximate model feature count at depth 0, 100..5000 (default 1000)"},
              {"--depths", "N", "focus-stack depths, 1..16 (default 4)"},
@@ -24,7 +25,8 @@ int vectors(const std::vector<std::string>& argv) {
              {"--noise", "P", "salt-and-pepper rate in [0,1] (default 0.02)"},
              {"--session-frames", "N", "frames of the session's sequence, 1..1000 (default 16)"},
              {"--hidden", "START,FRAMES", "the session's occlusion (default 4,8)"},
-             {"--seed", "S", "seed (default 1)"}});
+             {"--particles", "N", "the particle tracker's particles in particle.gbp, 1..100000 (default 1000)"},
+             {"--seed", "S", "seed (default 1; the scene's and the particle tracker's)"}});
   if (!args.parse(argv)) return 0;
   host::VectorSceneOptions o;
   o.model_points = static_cast<std::uint32_t>(args.integer("--points", o.model_points, 100, 5000));
@@ -36,6 +38,7 @@ int vectors(const std::vector<std::string>& argv) {
   o.noise = args.number("--noise", o.noise, 0.0, 1.0);
   o.seed = static_cast<std::uint64_t>(args.integer("--seed", 1, 0, INT64_MAX));
   o.session_frames = static_cast<std::uint32_t>(args.integer("--session-frames", o.session_frames, 1, 1000));
+  o.particles = static_cast<std::uint32_t>(args.integer("--particles", o.particles, 1, 100000));
   if (args.has("--hidden")) {
     const auto hidden = app::parse_number_list(args.get("--hidden"), "--hidden", 2, 2);
     for (double v : hidden)
@@ -47,10 +50,11 @@ int vectors(const std::vector<std::string>& argv) {
   const auto s = host::write_test_vectors(o, args.get("--out"));
   std::fprintf(stderr,
                "%s: %zu-point model x %u depths, %u cells, table %zu bytes (keep %.3g%%); %u frames %ux%u, vectors %zu bytes; "
-               "%u/%u frames on the true pose; session %u frames, %zu bytes, %u lost, %s\n",
+               "%u/%u frames on the true pose; session %u frames, %zu bytes, %u lost, %s; particle tracker %zu bytes, %u frames "
+               "tracking\n",
                args.get("--out").c_str(), s.model_points, o.depths, s.cells, s.table_bytes, 100 * s.keep, o.frames, s.width, s.height,
                s.vector_bytes, s.frames_on_truth, o.frames, o.session_frames, s.session_bytes, s.session_lost_frames,
-               s.session_reacquired ? "reacquired" : "not reacquired");
+               s.session_reacquired ? "reacquired" : "not reacquired", s.particle_bytes, s.particle_frames_tracking);
   return 0;
 }
 

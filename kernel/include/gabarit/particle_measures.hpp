@@ -52,6 +52,11 @@ constexpr std::size_t edge_map_words(std::uint32_t width, std::uint32_t height) 
   return std::size_t{height} * ((std::size_t{width} + 63) / 64);
 }
 
+// The loader's feature scratch for windows up to `width` wide: strips of 16
+// rows (any size of at least one row gives the same map; more rows, fewer
+// detector calls).
+constexpr std::size_t edge_map_features(std::uint32_t width) noexcept { return std::size_t{width} * 16; }
+
 // One bit per pixel of an image window: set where the detector found a feature.
 struct EdgeMap {
   ImageWindow window;

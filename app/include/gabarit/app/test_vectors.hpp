@@ -6,7 +6,11 @@
 //   session.gbs  a TrackingSession (motion filter, refinement, recovery,
 //                depth and angle by intensity) over a sequence with an
 //                occlusion: the session's pose, confidence, state and score,
-//                and the vote it searched (the format below).
+//                and the vote it searched (the format below);
+//   particle.gbp the particle tracker (gabarit track --tracker particle's
+//                defaults on that table: the edge measure, its finer
+//                measure, vote-guided proposals, 1,000 particles, seed 1)
+//                over the session's sequence: every frame's estimate.
 //
 // Like the kernel this reader never allocates, so the same code runs in the
 // firmware on a const array in flash and on the host on a file read into memory.
@@ -25,6 +29,7 @@
 #include <span>
 
 #include "gabarit/image_view.hpp"
+#include "gabarit/particle_filter.hpp"
 #include "gabarit/status.hpp"
 #include "gabarit/table_view.hpp"
 #include "gabarit/tracker.hpp"
@@ -157,5 +162,70 @@ void encode_session_record(const SessionResult& result, std::span<std::byte, kSe
 // the session's; a mismatch is described in `report`.
 Status check_session_vectors(const TableView& table, const SessionVectorSet& set, SessionScratch scratch,
                              std::span<ImageView> stack_views, Report& report) noexcept;
+
+// ---------------------------------------------------------------------------
+// Particle vectors (docs/file-formats.md), little-endian:
+//   header   64 bytes  magic "GBPART01", u32 frame_count, u32 width, u32 height,
+//                      u8 detector kind, u8 flags (1: the finer measure),
+//                      u16 detector threshold, f32 init x, y, theta_deg,
+//                      u16 init depth, u16 vote proposals (0..8), u32 particles,
+//                      u32 edge stride, u32 edge tolerance, u32 0, u64 seed
+//   frames   frame_count * width * height bytes
+//   expected frame_count records of kParticleRecordBytes: f32 x, y,
+//            theta_deg, u16 depth, u8 state, u8 flags (1 held, 2 part of the
+//            cloud re-drawn), f32 score, u32 modes, u32 particles in the
+//            chosen mode, u32 particles drawn around the proposals
+//   trailer  u32 CRC-32 of every byte before it
+// The filter runs with the default ParticleFilterOptions (every improvement
+// of chapter 3 on) and the edge measure of particle_measures.hpp, as
+// gabarit track --tracker particle runs it on a table without model images.
+inline constexpr char kParticleMagic[8] = {'G', 'B', 'P', 'A', 'R', 'T', '0', '1'};
+inline constexpr std::size_t kParticleHeaderBytes = 64;
+inline constexpr std::size_t kParticleRecordBytes = 32;
+// The most particles a file may ask for (the firmware sizes for fewer).
+inline constexpr std::uint32_t kMaxVectorParticles = 100000;
+
+constexpr std::size_t particle_file_bytes(std::uint32_t frames, std::uint32_t width, std::uint32_t height) noexcept {
+  return kParticleHeaderBytes + std::size_t{frames} * width * height + std::size_t{frames} * kParticleRecordBytes + kTrailerBytes;
+}
+
+struct ParticleVectorSet {
+  std::uint32_t frame_count = 0;
+  std::uint32_t width = 0;
+  std::uint32_t height = 0;
+  Detector detector;
+  Pose init;
+  std::uint32_t particles = 1000;
+  std::uint64_t seed = 1;
+  std::uint32_t proposals = 4;
+  std::uint32_t edge_stride = 2;
+  std::uint32_t edge_tolerance = 0;
+  bool finer = true;
+  std::span<const std::byte> frames;    // frame_count * width * height
+  std::span<const std::byte> expected;  // frame_count * kParticleRecordBytes
+
+  ImageView frame(std::uint32_t i) const noexcept {
+    return {reinterpret_cast<const std::uint8_t*>(frames.data()) + std::size_t{i} * width * height, width, height, width};
+  }
+};
+
+// Validates size, magic, dimensions, the filter's numbers and CRC. Errors as open_vectors.
+Status open_particle_vectors(std::span<const std::byte> bytes, ParticleVectorSet& out) noexcept;
+void encode_particle_header(const ParticleVectorSet& set, std::span<std::byte, kParticleHeaderBytes> out) noexcept;
+void encode_particle_record(const ParticleEstimate& estimate, std::span<std::byte, kParticleRecordBytes> out) noexcept;
+
+// The replay's memory, sized for set.particles and set.width x set.height.
+struct ParticleVectorScratch {
+  ParticleScratch particles;              // particle_scratch_particles and particle_scratch_order of set.particles
+  std::span<std::uint64_t> edge_bits;     // edge_map_words(width, height)
+  std::span<RoiPoint> edge_features;      // edge_map_features(width)
+  TrackerScratch proposer;                // track_step's for the table (the proposals' vote)
+};
+
+// Replays the particle tracker from the initial pose and compares every
+// field of every record. Errors: kBufferTooSmall for scratch short of the
+// sizes above; otherwise the filter's. A mismatch is described in `report`.
+Status check_particle_vectors(const TableView& table, const ParticleVectorSet& set, ParticleVectorScratch scratch,
+                              Report& report) noexcept;
 
 }  // namespace gabarit::vectors

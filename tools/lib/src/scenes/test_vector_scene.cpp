@@ -4,10 +4,12 @@
 #include <cmath>
 #include <filesystem>
 #include <set>
+#include <string>
 #include <vector>
 
 #include "gabarit/app/error.hpp"
 #include "gabarit/app/image_io.hpp"
+#include "gabarit/app/particle_run.hpp"
 #include "gabarit/app/files.hpp"
 #include "gabarit/app/scratch.hpp"
 #include "gabarit/app/test_vectors.hpp"
@@ -207,6 +209,54 @@ std::vector<std::byte> session_vectors(const VectorSceneOptions& o, const ModelS
 
 }
 
+// particle.gbp: the session's sequence (frames and initial pose from its
+// file) through the particle tracker as gabarit track --tracker particle
+// runs it on this table (app::ParticleTracker, the CLI's defaults but for
+// the particle count), and every frame's estimate.
+std::vector<std::byte> particle_vectors(const VectorSceneOptions& o, const TableView& table,
+                                        const std::vector<std::byte>& session_file, VectorSceneSummary& summary) {
+  vectors::SessionVectorSet session;
+  if (const Status s = vectors::open_session_vectors(session_file, session); s != Status::kOk)
+    throw app::Error(std::string("vectors: session file invalid: ") + status_name(s));
+  app::ParticleRunOptions run;
+  run.particles = o.particles;
+  run.seed = o.seed;
+  if (app::resolved_measure(run.measure, table) != app::ParticleMeasureKind::kEdges)
+    throw app::Error("vectors: the particle vectors record the edge measure (a table without model images)");
+  vectors::ParticleVectorSet set;
+  set.frame_count = session.frame_count;
+  set.width = session.width;
+  set.height = session.height;
+  set.detector = detector_of(table);
+  set.init = session.init;
+  set.particles = run.particles;
+  set.seed = run.seed;
+  set.proposals = run.proposals;
+  set.edge_stride = run.edge_stride;
+  set.edge_tolerance = run.edge_tolerance;
+  set.finer = run.finer;
+  std::vector<std::byte> file(vectors::particle_file_bytes(set.frame_count, set.width, set.height));
+  std::copy(session.frames.begin(), session.frames.end(), file.begin() + static_cast<std::ptrdiff_t>(vectors::kParticleHeaderBytes));
+  app::ParticleTracker tracker(table, set.width, set.height, run);
+  tracker.start(set.init);
+  const std::size_t records_at = vectors::kParticleHeaderBytes + session.frames.size();
+  summary.particle_frames_tracking = 0;
+  app::GrayImage frame(set.width, set.height, 0);
+  for (std::uint32_t f = 0; f < set.frame_count; ++f) {
+    const ImageView view = session.frame(f);
+    std::copy_n(view.pixels, frame.pixels.size(), frame.pixels.begin());
+    const ParticleEstimate e = tracker.step(frame);
+    vectors::encode_particle_record(e, std::span<std::byte, vectors::kParticleRecordBytes>(
+                                           file.data() + records_at + std::size_t{f} * vectors::kParticleRecordBytes,
+                                           vectors::kParticleRecordBytes));
+    summary.particle_frames_tracking += e.state == TrackState::kTracking;
+  }
+  vectors::encode_particle_header(set, std::span<std::byte, vectors::kParticleHeaderBytes>(file.data(), vectors::kParticleHeaderBytes));
+  const std::size_t body = file.size() - vectors::kTrailerBytes;
+  store_le<std::uint32_t>(file.data() + body, crc32(std::span<const std::byte>(file.data(), body)));
+  return file;
+}
+
 }  // namespace
 
 VectorSceneSummary write_test_vectors(const VectorSceneOptions& o, const std::string& dir) {
@@ -216,6 +266,8 @@ VectorSceneSummary write_test_vectors(const VectorSceneOptions& o, const std::st
   if (!(o.keep >= 0 && o.keep <= 1)) throw app::Error("vectors: keep must be in (0, 1]");
   if (o.keep == 0 && o.table_budget_bytes == 0) throw app::Error("vectors: give a table budget or a keep ratio");
   if (!(o.noise >= 0 && o.noise <= 1)) throw app::Error("vectors: noise must be in [0, 1]");
+  if (o.particles < 1 || o.particles > vectors::kMaxVectorParticles)
+    throw app::Error("vectors: particles must be in 1.." + std::to_string(vectors::kMaxVectorParticles));
 
   ModelStack model;
   const std::vector<Point> base = nested_curves(o.model_points, o.seed);
@@ -265,12 +317,15 @@ VectorSceneSummary write_test_vectors(const VectorSceneOptions& o, const std::st
   std::vector<std::byte> file = step_vectors(o, model, table, set, rng, buffers, summary);
   std::vector<std::byte> screened_file;
   std::vector<std::byte> session_file = session_vectors(o, model, table, set, extent, rng, buffers, summary, screened_file);
+  const std::vector<std::byte> particle_file = particle_vectors(o, table, session_file, summary);
 
   std::filesystem::create_directories(dir);
   app::write_file((std::filesystem::path(dir) / "table.gbt").string(), table_bytes);
   app::write_file((std::filesystem::path(dir) / "vectors.gbv").string(), file);
   app::write_file((std::filesystem::path(dir) / "session.gbs").string(), session_file);
   app::write_file((std::filesystem::path(dir) / "session-screened.gbs").string(), screened_file);
+  app::write_file((std::filesystem::path(dir) / "particle.gbp").string(), particle_file);
+  summary.particle_bytes = particle_file.size();
   summary.session_bytes = session_file.size();
   summary.model_points = model.depths[0].size();
   summary.table_bytes = table_bytes.size();

@@ -4,7 +4,8 @@
 // results recorded frame by frame (app/include/gabarit/app/test_vectors.hpp):
 // track_step's (vectors.gbv), and a TrackingSession's over a longer sequence
 // in which the object is hidden for a while, with the model images as its
-// focus stack (session.gbs).
+// focus stack (session.gbs), and the particle tracker's over the session's
+// sequence (particle.gbp).
 // The firmware embeds the same files, so the defaults are sized for an
 // STM32H7-class part (2 MiB flash, 512 KiB RAM): the table is built to a
 // budget of half the flash (table_budget.hpp), the other half holding the
@@ -30,6 +31,7 @@ struct VectorSceneOptions {
   std::uint32_t session_frames = 16;
   std::uint32_t hidden_from = 4;
   std::uint32_t hidden_frames = 8;
+  std::uint32_t particles = 1000;  // the particle tracker's (particle.gbp), 1..kMaxVectorParticles
 };
 
 struct VectorSceneSummary {
@@ -44,9 +46,12 @@ struct VectorSceneSummary {
   std::size_t session_bytes = 0;
   std::uint32_t session_lost_frames = 0;  // frames the session reported lost
   bool session_reacquired = false;        // it found the object again after the occlusion
+  std::size_t particle_bytes = 0;
+  std::uint32_t particle_frames_tracking = 0;  // frames the particle tracker reported tracking
 };
 
-// Writes DIR/table.gbt, DIR/vectors.gbv and DIR/session.gbs. Same options, same bytes.
+// Writes DIR/table.gbt, DIR/vectors.gbv, DIR/session.gbs, DIR/session-screened.gbs
+// and DIR/particle.gbp. Same options, same bytes.
 VectorSceneSummary write_test_vectors(const VectorSceneOptions& options, const std::string& dir);
 
 }  // namespace gabarit::host
