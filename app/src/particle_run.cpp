@@ -37,8 +37,7 @@ ParticleRunOptions particle_run_options(const SessionProfile& profile) {
 
 struct ParticleTracker::Parts {
   using StencilFilter = ParticleFilter<StencilVoteMeasure, EdgeCorrelationMeasure, EdgeMapLoader>;
-  using IntensityFilter = ParticleFilter<IntensityCorrelationMeasure, IntensityCorrelationMeasure, NoFrameLoader,
-                                         DefaultPropagation, KinematicCompensation, ModeAnalysis, StencilVoteProposer>;
+  using IntensityFilter = IntensityParticleFilter;
   static ParticleRunOptions resolved(ParticleRunOptions o, const TableView& t) {
     o.measure = resolved_measure(o.measure, t);
     return o;

@@ -281,6 +281,8 @@ Status open_particle_vectors(std::span<const std::byte> bytes, ParticleVectorSet
   const bool common_ok = load_common(p, set);
   const std::uint8_t flags = std::to_integer<std::uint8_t>(p[21]);
   set.finer = (flags & 1u) != 0;
+  set.intensity = (flags & 2u) != 0;
+  set.intensity_samples = load_le<std::uint32_t>(p + 52);
   set.proposals = load_le<std::uint16_t>(p + 38);
   set.particles = load_le<std::uint32_t>(p + 40);
   set.edge_stride = load_le<std::uint32_t>(p + 44);
@@ -288,8 +290,10 @@ Status open_particle_vectors(std::span<const std::byte> bytes, ParticleVectorSet
   set.seed = load_le<std::uint64_t>(p + 56);
   // The frame's sides are the edge map's window: at most 65535 (u16) each.
   const bool filter_ok = set.particles >= 1 && set.particles <= kMaxVectorParticles && set.proposals <= kMaxParticleProposals &&
-                         set.edge_stride >= 1 && set.edge_stride <= 64 && set.edge_tolerance <= 3;
-  if (!common_ok || (flags & ~1u) != 0 || !filter_ok || load_le<std::uint32_t>(p + 52) != 0) return Status::kBadHeaderField;
+                         set.edge_stride >= 1 && set.edge_stride <= 64 && set.edge_tolerance <= 3 &&
+                         (set.intensity ? set.intensity_samples >= 16 && set.intensity_samples <= kMaxIntensityMeasureSamples
+                                        : set.intensity_samples == 0);
+  if (!common_ok || (flags & ~3u) != 0 || !filter_ok) return Status::kBadHeaderField;
   GABARIT_TRY(check_size_and_crc(bytes, particle_file_bytes(set.frame_count, set.width, set.height)));
   const std::size_t pixels = std::size_t{set.frame_count} * set.width * set.height;
   set.frames = bytes.subspan(kParticleHeaderBytes, pixels);
@@ -302,11 +306,12 @@ void encode_particle_header(const ParticleVectorSet& set, std::span<std::byte, k
   std::byte* p = out.data();
   std::memset(p, 0, kParticleHeaderBytes);
   store_common(p, kParticleMagic, set.frame_count, set.width, set.height, set.detector, set.init);
-  p[21] = static_cast<std::byte>(set.finer ? 1u : 0u);
+  p[21] = static_cast<std::byte>((set.finer ? 1u : 0u) | (set.intensity ? 2u : 0u));
   store_le<std::uint16_t>(p + 38, static_cast<std::uint16_t>(set.proposals));
   store_le<std::uint32_t>(p + 40, set.particles);
   store_le<std::uint32_t>(p + 44, set.edge_stride);
   store_le<std::uint32_t>(p + 48, set.edge_tolerance);
+  store_le<std::uint32_t>(p + 52, set.intensity ? set.intensity_samples : 0u);
   store_le<std::uint64_t>(p + 56, set.seed);
 }
 
@@ -325,25 +330,14 @@ void encode_particle_record(const ParticleEstimate& e, std::span<std::byte, kPar
   store_le<std::uint32_t>(p + 28, e.proposed);
 }
 
-Status check_particle_vectors(const TableView& table, const ParticleVectorSet& set, ParticleVectorScratch scratch,
-                              Report& report) noexcept {
-  report = Report{};
-  const ParticleScratch& ps = scratch.particles;
-  if (ps.cloud.size() < particle_scratch_particles(set.particles) || ps.next.size() < particle_scratch_particles(set.particles) ||
-      ps.order.size() < particle_scratch_order(set.particles) || scratch.edge_bits.size() < edge_map_words(set.width, set.height) ||
-      scratch.edge_features.size() < edge_map_features(set.width) || set.width > 65535 || set.height > 65535) {
-    return Status::kBufferTooSmall;
-  }
-  // The composition app::ParticleTracker builds on the heap, on the caller's memory.
-  EdgeMapLoader loader(set.detector, scratch.edge_bits.first(edge_map_words(set.width, set.height)),
-                       scratch.edge_features.first(edge_map_features(set.width)), static_cast<std::uint16_t>(set.width),
-                       static_cast<std::uint16_t>(set.height));
-  EdgeCorrelationMeasure edges(table, loader, set.edge_stride, set.edge_tolerance);
-  EdgeCorrelationMeasure fine(table, loader, 1, set.edge_tolerance);
-  EdgeParticleFilter filter(edges, set.finer ? &fine : nullptr, &loader);
-  StencilVoteProposer proposer(table, set.detector, scratch.proposer, set.proposals > 0 ? set.proposals : 1);
+namespace {
+
+// Starts `filter` and steps it over every frame, comparing each estimate.
+template <class Filter>
+Status replay_particles(Filter& filter, StencilVoteProposer& proposer, const TableView& table, const ParticleVectorSet& set,
+                        const ParticleScratch& ps, ParticleFilterOptions options, Report& report) noexcept {
   if (set.proposals > 0) filter.propose_with(&proposer);
-  GABARIT_TRY(filter.start(ParticleFilterOptions{}, set.init, table.depth_count(), set.seed,
+  GABARIT_TRY(filter.start(options, set.init, table.depth_count(), set.seed,
                            {ps.cloud.first(set.particles), ps.next.first(set.particles), ps.order}));
   for (std::uint32_t i = 0; i < set.frame_count; ++i) {
     ParticleEstimate estimate;
@@ -355,6 +349,53 @@ Status check_particle_vectors(const TableView& table, const ParticleVectorSet& s
     report.frames_checked = i + 1;
   }
   return Status::kOk;
+}
+
+// The compositions app::ParticleTracker builds on the heap, on the caller's memory.
+Status replay_edges(const TableView& table, const ParticleVectorSet& set, const ParticleVectorScratch& scratch,
+                    StencilVoteProposer& proposer, Report& report) noexcept {
+  EdgeMapLoader loader(set.detector, scratch.edge_bits.first(edge_map_words(set.width, set.height)),
+                       scratch.edge_features.first(edge_map_features(set.width)), static_cast<std::uint16_t>(set.width),
+                       static_cast<std::uint16_t>(set.height));
+  EdgeCorrelationMeasure edges(table, loader, set.edge_stride, set.edge_tolerance);
+  EdgeCorrelationMeasure fine(table, loader, 1, set.edge_tolerance);
+  EdgeParticleFilter filter(edges, set.finer ? &fine : nullptr, &loader);
+  return replay_particles(filter, proposer, table, set, scratch.particles, ParticleFilterOptions{}, report);
+}
+
+Status replay_intensity(const TableView& table, const ParticleVectorSet& set, const ParticleVectorScratch& scratch,
+                        StencilVoteProposer& proposer, Report& report) noexcept {
+  const std::uint16_t depths = table.depth_count();
+  for (std::uint16_t d = 0; d < depths; ++d) scratch.stack_views[d] = table.model_image(d);
+  const FocusStack stack{scratch.stack_views.first(depths), table.model_ref_x(), table.model_ref_y(), 2};
+  IntensityCorrelationMeasure& coarse = scratch.intensity[0];
+  IntensityCorrelationMeasure& fine = scratch.intensity[1];
+  coarse.reset(stack, set.intensity_samples);
+  fine.reset(stack, 0);
+  IntensityParticleFilter filter(coarse, set.finer ? &fine : nullptr);
+  ParticleFilterOptions options;
+  options.sharpness = kIntensitySharpness;
+  return replay_particles(filter, proposer, table, set, scratch.particles, options, report);
+}
+
+}  // namespace
+
+Status check_particle_vectors(const TableView& table, const ParticleVectorSet& set, ParticleVectorScratch scratch,
+                              Report& report) noexcept {
+  report = Report{};
+  const ParticleScratch& ps = scratch.particles;
+  if (ps.cloud.size() < particle_scratch_particles(set.particles) || ps.next.size() < particle_scratch_particles(set.particles) ||
+      ps.order.size() < particle_scratch_order(set.particles) || set.width > 65535 || set.height > 65535) {
+    return Status::kBufferTooSmall;
+  }
+  if (set.intensity && !table.has_model_images()) return Status::kInvalidArgument;
+  if (set.intensity ? scratch.stack_views.size() < table.depth_count() || scratch.intensity.size() < 2
+                    : scratch.edge_bits.size() < edge_map_words(set.width, set.height) ||
+                          scratch.edge_features.size() < edge_map_features(set.width)) {
+    return Status::kBufferTooSmall;
+  }
+  StencilVoteProposer proposer(table, set.detector, scratch.proposer, set.proposals > 0 ? set.proposals : 1);
+  return set.intensity ? replay_intensity(table, set, scratch, proposer, report) : replay_edges(table, set, scratch, proposer, report);
 }
 
 }  // namespace gabarit::vectors

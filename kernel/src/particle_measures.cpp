@@ -217,7 +217,12 @@ void StencilVoteProposer::account(FrameLedger& ledger) const noexcept {
   ledger.votes += tally_.votes;
 }
 
-IntensityCorrelationMeasure::IntensityCorrelationMeasure(const FocusStack& stack, std::uint32_t samples) noexcept : stack_(stack) {
+void IntensityCorrelationMeasure::reset(const FocusStack& stack, std::uint32_t samples) noexcept {
+  stack_ = stack;
+  frame_ = {};
+  ring_ = OutlineRing::kWhereItAgrees;
+  surround_ = 0;
+  count_ = 0;
   if (samples == 0 || !valid_focus_stack(stack)) return;
   const std::uint32_t want = samples < 16 ? 16 : (samples > kMaxIntensityMeasureSamples ? kMaxIntensityMeasureSamples : samples);
   const ImageView& m = stack.images[0];

@@ -46,6 +46,9 @@ gabarit::Particle g_next[gabarit::particle_scratch_particles(gabarit::mcu::kMaxP
 std::uint32_t g_order[gabarit::particle_scratch_order(gabarit::mcu::kMaxParticles)];
 std::uint64_t g_edge_bits[gabarit::mcu::kEdgeMapWords];
 gabarit::RoiPoint g_edge_features[gabarit::mcu::kEdgeMapFeatures];
+// With the intensity measure: the coarse and the finer measure, reset once the
+// table is known (constant-initialised: no static constructor).
+gabarit::IntensityCorrelationMeasure g_intensity[2];
 
 std::span<const std::byte> between(const std::byte* begin, const std::byte* end) {
   return {begin, static_cast<std::size_t>(end - begin)};
@@ -80,12 +83,14 @@ int replay_particles(const gabarit::TableView& table, gabarit::TrackerScratch sc
     return 1;
   }
   gabarit::vectors::Report report;
-  const gabarit::vectors::ParticleVectorScratch particle_scratch{{g_cloud, g_next, g_order}, g_edge_bits, g_edge_features, scratch};
+  const gabarit::vectors::ParticleVectorScratch particle_scratch{{g_cloud, g_next, g_order}, g_edge_bits, g_edge_features, scratch,
+                                                                 g_stack_views, g_intensity};
   if (const auto s = gabarit::vectors::check_particle_vectors(table, set, particle_scratch, report); s != gabarit::Status::kOk)
     return fail("particle filter", s);
   if (!report.match) return mismatch("particle", report);
   Line result;
-  console_write(result.text("PASS: particle tracker, ").dec(std::uint64_t{report.frames_checked}).text(" frames ")
+  console_write(result.text("PASS: particle tracker (").text(set.intensity ? "intensity" : "edge").text(" measure), ")
+                    .dec(std::uint64_t{report.frames_checked}).text(" frames ")
                     .dec(std::uint64_t{set.width}).text("x").dec(std::uint64_t{set.height}).text(", ")
                     .dec(std::uint64_t{set.particles}).text(" particles, seed ").dec(set.seed)
                     .text(": estimates bit-identical to the host"));

@@ -53,8 +53,8 @@ class TestVectors : public ::testing::Test {
 
   // Table a/table.gbt, copied to 8-byte-aligned storage (the sections are aligned).
   struct AlignedTable {
-    AlignedTable() {
-      const std::vector<std::byte> bytes = read_bytes(dir_ / "a" / "table.gbt");
+    explicit AlignedTable(const char* name = "table.gbt") {
+      const std::vector<std::byte> bytes = read_bytes(dir_ / "a" / name);
       words.resize((bytes.size() + 7) / 8);
       std::memcpy(words.data(), bytes.data(), bytes.size());
       EXPECT_EQ(TableView::open({reinterpret_cast<const std::byte*>(words.data()), bytes.size()}, view), Status::kOk);
@@ -86,8 +86,9 @@ class TestVectors : public ::testing::Test {
 
   // Replays particle `file` on the host against table a/table.gbt, with
   // scratch for `particles` particles.
-  static Status replay_particles(const std::vector<std::byte>& file, vectors::Report& report, std::uint32_t particles = 300) {
-    AlignedTable aligned;
+  static Status replay_particles(const std::vector<std::byte>& file, vectors::Report& report, std::uint32_t particles = 300,
+                                 const char* table_name = "table.gbt") {
+    AlignedTable aligned(table_name);
     const TableView& table = aligned.view;
     vectors::ParticleVectorSet set;
     GABARIT_TRY(vectors::open_particle_vectors(file, set));
@@ -96,7 +97,10 @@ class TestVectors : public ::testing::Test {
     std::vector<std::uint64_t> bits(edge_map_words(set.width, set.height));
     std::vector<RoiPoint> features(edge_map_features(set.width));
     app::TrackerBuffers buffers(table, app::VoterChoice::kCsr);
-    return vectors::check_particle_vectors(table, set, {{cloud, next, order}, bits, features, buffers.scratch()}, report);
+    std::vector<ImageView> stack_views(table.depth_count());
+    std::vector<IntensityCorrelationMeasure> measures(2);
+    return vectors::check_particle_vectors(table, set, {{cloud, next, order}, bits, features, buffers.scratch(), stack_views, measures},
+                                           report);
   }
 
   static inline std::filesystem::path dir_;
@@ -109,6 +113,8 @@ TEST_F(TestVectors, SameOptionsWriteTheSameBytes) {
   EXPECT_EQ(read_bytes(dir_ / "a" / "session.gbs"), read_bytes(dir_ / "b" / "session.gbs"));
   EXPECT_EQ(read_bytes(dir_ / "a" / "session-screened.gbs"), read_bytes(dir_ / "b" / "session-screened.gbs"));
   EXPECT_EQ(read_bytes(dir_ / "a" / "particle.gbp"), read_bytes(dir_ / "b" / "particle.gbp"));
+  EXPECT_EQ(read_bytes(dir_ / "a" / "particle-table.gbt"), read_bytes(dir_ / "b" / "particle-table.gbt"));
+  EXPECT_EQ(read_bytes(dir_ / "a" / "particle-intensity.gbp"), read_bytes(dir_ / "b" / "particle-intensity.gbp"));
 }
 
 // The session's sequence exercises what the session adds: the target is
@@ -239,6 +245,23 @@ TEST_F(TestVectors, TheParticleTrackerReplaysExactlyThroughTheOcclusion) {
   EXPECT_EQ(replay_particles(file, report, 299), Status::kBufferTooSmall);
 }
 
+// The intensity measure, what gabarit track --tracker particle runs on a
+// table with model images, on the same model's table with its images.
+TEST_F(TestVectors, TheIntensityParticleTrackerReplaysExactlyOnItsTable) {
+  EXPECT_GT(summary_.particle_intensity_frames_tracking, 0u);
+  const auto file = read_bytes(dir_ / "a" / "particle-intensity.gbp");
+  vectors::ParticleVectorSet set;
+  ASSERT_EQ(vectors::open_particle_vectors(file, set), Status::kOk);
+  EXPECT_TRUE(set.intensity);
+  EXPECT_EQ(set.intensity_samples, kIntensityMeasureSamples);
+  vectors::Report report;
+  ASSERT_EQ(replay_particles(file, report, 300, "particle-table.gbt"), Status::kOk);
+  EXPECT_TRUE(report.match) << "frame " << report.frame << " field " << report.field;
+  EXPECT_EQ(report.frames_checked, 14u);
+  // On a table without model images: refused, not scored against nothing.
+  EXPECT_EQ(replay_particles(file, report, 300, "table.gbt"), Status::kInvalidArgument);
+}
+
 TEST_F(TestVectors, ADifferentParticleEstimateIsReportedWithFrameAndField) {
   std::vector<std::byte> file = read_bytes(dir_ / "a" / "particle.gbp");
   vectors::ParticleVectorSet set;
@@ -276,7 +299,13 @@ TEST_F(TestVectors, DamagedParticleFilesAreRefused) {
   EXPECT_EQ(header_field(40, vectors::kMaxVectorParticles + 1, 4), Status::kBadHeaderField) << "too many particles";
   EXPECT_EQ(header_field(44, 0, 4), Status::kBadHeaderField) << "stride 0";
   EXPECT_EQ(header_field(48, 4, 4), Status::kBadHeaderField) << "tolerance over 3";
-  EXPECT_EQ(header_field(52, 1, 4), Status::kBadHeaderField) << "reserved";
+  EXPECT_EQ(header_field(52, 256, 4), Status::kBadHeaderField) << "intensity samples without the intensity measure";
+  EXPECT_EQ(header_field(21, 3, 1), Status::kBadHeaderField) << "the intensity measure without its samples";
+  const auto intensity = read_bytes(dir_ / "a" / "particle-intensity.gbp");
+  auto too_few = intensity;
+  store_le<std::uint32_t>(too_few.data() + 52, 15);
+  reseal(too_few);
+  EXPECT_EQ(vectors::open_particle_vectors(too_few, set), Status::kBadHeaderField) << "fewer than 16 samples";
   EXPECT_EQ(header_field(40, 301, 4), Status::kOk) << "the header's own check passes; the replay then needs more scratch";
   EXPECT_EQ(vectors::open_particle_vectors(read_bytes(dir_ / "a" / "session.gbs"), set), Status::kBadMagic);
 }

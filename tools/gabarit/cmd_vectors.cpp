@@ -13,8 +13,10 @@ int vectors(const std::vector<std::string>& argv) {
             "theta +-3 deg in 2-deg cells, every focus-stack depth), DIR/vectors.gbv (frames plus the host's\n"
             "track_step results) and DIR/session.gbs (a longer sequence with an occlusion, the focus stack and a\n"
             "TrackingSession's results: motion filter, refinement, recovery, depth and angle by intensity), its twin\n"
-            "DIR/session-screened.gbs, and DIR/particle.gbp (the session's sequence through gabarit track --tracker\n"
-            "particle's defaults on that table: every frame's estimate), all in docs/file-formats.md. Every target replays them and must match bit for bit. Same options, same bytes.",
+            "DIR/session-screened.gbs, DIR/particle.gbp (the session's sequence through gabarit track --tracker\n"
+            "particle's defaults on that table: every frame's estimate) and DIR/particle-intensity.gbp (the same on\n"
+            "DIR/particle-table.gbt, the model's table with its images: the intensity measure), all in\n"
+            "docs/file-formats.md. Every target replays them and must match bit for bit. Same options, same bytes.",
             {{"--out", "DIR", "output directory", false, true},
              {"--points", "N", "approximate model feature count at depth 0, 100..5000 (default 1000)"},
              {"--depths", "N", "focus-stack depths, 1..16 (default 4)"},
@@ -51,10 +53,11 @@ int vectors(const std::vector<std::string>& argv) {
   std::fprintf(stderr,
                "%s: %zu-point model x %u depths, %u cells, table %zu bytes (keep %.3g%%); %u frames %ux%u, vectors %zu bytes; "
                "%u/%u frames on the true pose; session %u frames, %zu bytes, %u lost, %s; particle tracker %zu bytes, %u frames "
-               "tracking\n",
+               "tracking; with the intensity measure on a %zu-byte table with images, %u frames tracking\n",
                args.get("--out").c_str(), s.model_points, o.depths, s.cells, s.table_bytes, 100 * s.keep, o.frames, s.width, s.height,
                s.vector_bytes, s.frames_on_truth, o.frames, o.session_frames, s.session_bytes, s.session_lost_frames,
-               s.session_reacquired ? "reacquired" : "not reacquired", s.particle_bytes, s.particle_frames_tracking);
+               s.session_reacquired ? "reacquired" : "not reacquired", s.particle_bytes, s.particle_frames_tracking,
+               s.particle_table_bytes, s.particle_intensity_frames_tracking);
   return 0;
 }
 

@@ -188,7 +188,14 @@ class IntensityCorrelationMeasure {
   // listed once here. 0: every sample at the stack's own step, exactly
   // correlation_at (the session's verified score; its cost grows with the
   // model's area, not the list's).
-  IntensityCorrelationMeasure(const FocusStack& stack, std::uint32_t samples) noexcept;
+  IntensityCorrelationMeasure(const FocusStack& stack, std::uint32_t samples) noexcept { reset(stack, samples); }
+  // A measure of nothing until reset (scores 0): static storage a firmware
+  // fills once it knows its table, without a temporary of the list's size.
+  // Every byte zero, so such storage is .bss rather than an initialised
+  // image in flash.
+  constexpr IntensityCorrelationMeasure() noexcept : stack_{{}, 0.0f, 0.0f, 0}, ring_{} {}
+  // As the constructor, in place.
+  void reset(const FocusStack& stack, std::uint32_t samples) noexcept;
   // Keeps the frame (it must outlive the frame's weighing) and decides the
   // ring at the prediction. kInvalidArgument for an invalid frame or stack.
   [[nodiscard]] Status prepare(const ImageView& image, const Pose& predicted) noexcept;
@@ -217,5 +224,11 @@ class IntensityCorrelationMeasure {
   std::uint32_t count_ = 0;
   Sample list_[kMaxIntensityMeasureSamples];
 };
+
+// The filter gabarit track --tracker particle runs on a table with model
+// images: the intensity measure on its sparse subset, the same measure on
+// every sample as the finer one, no frame loader, vote proposals.
+using IntensityParticleFilter = ParticleFilter<IntensityCorrelationMeasure, IntensityCorrelationMeasure, NoFrameLoader,
+                                               DefaultPropagation, KinematicCompensation, ModeAnalysis, StencilVoteProposer>;
 
 }  // namespace gabarit

@@ -10,7 +10,9 @@
 //   particle.gbp the particle tracker (gabarit track --tracker particle's
 //                defaults on that table: the edge measure, its finer
 //                measure, vote-guided proposals, 1,000 particles, seed 1)
-//                over the session's sequence: every frame's estimate.
+//                over the session's sequence: every frame's estimate;
+//   particle-intensity.gbp  the same on particle-table.gbt, the model's table
+//                with its images: the intensity measure.
 //
 // Like the kernel this reader never allocates, so the same code runs in the
 // firmware on a const array in flash and on the host on a file read into memory.
@@ -30,6 +32,7 @@
 
 #include "gabarit/image_view.hpp"
 #include "gabarit/particle_filter.hpp"
+#include "gabarit/particle_measures.hpp"
 #include "gabarit/status.hpp"
 #include "gabarit/table_view.hpp"
 #include "gabarit/tracker.hpp"
@@ -166,10 +169,12 @@ Status check_session_vectors(const TableView& table, const SessionVectorSet& set
 // ---------------------------------------------------------------------------
 // Particle vectors (docs/file-formats.md), little-endian:
 //   header   64 bytes  magic "GBPART01", u32 frame_count, u32 width, u32 height,
-//                      u8 detector kind, u8 flags (1: the finer measure),
+//                      u8 detector kind, u8 flags (1: the finer measure,
+//                      2: the intensity measure, else the edge measure),
 //                      u16 detector threshold, f32 init x, y, theta_deg,
 //                      u16 init depth, u16 vote proposals (0..8), u32 particles,
-//                      u32 edge stride, u32 edge tolerance, u32 0, u64 seed
+//                      u32 edge stride, u32 edge tolerance, u32 intensity
+//                      samples (16..1024 with flag 2, else 0), u64 seed
 //   frames   frame_count * width * height bytes
 //   expected frame_count records of kParticleRecordBytes: f32 x, y,
 //            theta_deg, u16 depth, u8 state, u8 flags (1 held, 2 part of the
@@ -177,8 +182,10 @@ Status check_session_vectors(const TableView& table, const SessionVectorSet& set
 //            chosen mode, u32 particles drawn around the proposals
 //   trailer  u32 CRC-32 of every byte before it
 // The filter runs with the default ParticleFilterOptions (every improvement
-// of chapter 3 on) and the edge measure of particle_measures.hpp, as
-// gabarit track --tracker particle runs it on a table without model images.
+// of chapter 3 on) and the measure gabarit track --tracker particle runs:
+// the edge measure on a table without model images (particle.gbp), the
+// intensity measure with kIntensitySharpness on one with them
+// (particle-intensity.gbp, with its own table particle-table.gbt).
 inline constexpr char kParticleMagic[8] = {'G', 'B', 'P', 'A', 'R', 'T', '0', '1'};
 inline constexpr std::size_t kParticleHeaderBytes = 64;
 inline constexpr std::size_t kParticleRecordBytes = 32;
@@ -201,6 +208,8 @@ struct ParticleVectorSet {
   std::uint32_t edge_stride = 2;
   std::uint32_t edge_tolerance = 0;
   bool finer = true;
+  bool intensity = false;                // the intensity measure (needs a table with model images)
+  std::uint32_t intensity_samples = 0;   // its sparse subset
   std::span<const std::byte> frames;    // frame_count * width * height
   std::span<const std::byte> expected;  // frame_count * kParticleRecordBytes
 
@@ -220,11 +229,17 @@ struct ParticleVectorScratch {
   std::span<std::uint64_t> edge_bits;     // edge_map_words(width, height)
   std::span<RoiPoint> edge_features;      // edge_map_features(width)
   TrackerScratch proposer;                // track_step's for the table (the proposals' vote)
+  // The intensity measure's (set.intensity): a view per depth of the
+  // table's, and the coarse and the finer measure, reset here.
+  std::span<ImageView> stack_views;
+  std::span<IntensityCorrelationMeasure> intensity;  // 2
 };
 
 // Replays the particle tracker from the initial pose and compares every
 // field of every record. Errors: kBufferTooSmall for scratch short of the
-// sizes above; otherwise the filter's. A mismatch is described in `report`.
+// sizes above; kInvalidArgument for the intensity measure on a table
+// without model images; otherwise the filter's. A mismatch is described in
+// `report`.
 Status check_particle_vectors(const TableView& table, const ParticleVectorSet& set, ParticleVectorScratch scratch,
                               Report& report) noexcept;
 

@@ -212,17 +212,19 @@ std::vector<std::byte> session_vectors(const VectorSceneOptions& o, const ModelS
 // particle.gbp: the session's sequence (frames and initial pose from its
 // file) through the particle tracker as gabarit track --tracker particle
 // runs it on this table (app::ParticleTracker, the CLI's defaults but for
-// the particle count), and every frame's estimate.
+// the particle count: the edge measure on a table without model images, the
+// intensity measure on one with them), and every frame's estimate.
 std::vector<std::byte> particle_vectors(const VectorSceneOptions& o, const TableView& table,
-                                        const std::vector<std::byte>& session_file, VectorSceneSummary& summary) {
+                                        const std::vector<std::byte>& session_file, std::uint32_t& frames_tracking) {
   vectors::SessionVectorSet session;
   if (const Status s = vectors::open_session_vectors(session_file, session); s != Status::kOk)
     throw app::Error(std::string("vectors: session file invalid: ") + status_name(s));
   app::ParticleRunOptions run;
   run.particles = o.particles;
   run.seed = o.seed;
-  if (app::resolved_measure(run.measure, table) != app::ParticleMeasureKind::kEdges)
-    throw app::Error("vectors: the particle vectors record the edge measure (a table without model images)");
+  const app::ParticleMeasureKind measure = app::resolved_measure(run.measure, table);
+  if (measure != app::ParticleMeasureKind::kEdges && measure != app::ParticleMeasureKind::kIntensity)
+    throw app::Error("vectors: the particle vectors record the edge or the intensity measure");
   vectors::ParticleVectorSet set;
   set.frame_count = session.frame_count;
   set.width = session.width;
@@ -235,12 +237,14 @@ std::vector<std::byte> particle_vectors(const VectorSceneOptions& o, const Table
   set.edge_stride = run.edge_stride;
   set.edge_tolerance = run.edge_tolerance;
   set.finer = run.finer;
+  set.intensity = measure == app::ParticleMeasureKind::kIntensity;
+  set.intensity_samples = set.intensity ? run.intensity_samples : 0;
   std::vector<std::byte> file(vectors::particle_file_bytes(set.frame_count, set.width, set.height));
   std::copy(session.frames.begin(), session.frames.end(), file.begin() + static_cast<std::ptrdiff_t>(vectors::kParticleHeaderBytes));
   app::ParticleTracker tracker(table, set.width, set.height, run);
   tracker.start(set.init);
   const std::size_t records_at = vectors::kParticleHeaderBytes + session.frames.size();
-  summary.particle_frames_tracking = 0;
+  frames_tracking = 0;
   app::GrayImage frame(set.width, set.height, 0);
   for (std::uint32_t f = 0; f < set.frame_count; ++f) {
     const ImageView view = session.frame(f);
@@ -249,12 +253,34 @@ std::vector<std::byte> particle_vectors(const VectorSceneOptions& o, const Table
     vectors::encode_particle_record(e, std::span<std::byte, vectors::kParticleRecordBytes>(
                                            file.data() + records_at + std::size_t{f} * vectors::kParticleRecordBytes,
                                            vectors::kParticleRecordBytes));
-    summary.particle_frames_tracking += e.state == TrackState::kTracking;
+    frames_tracking += e.state == TrackState::kTracking;
   }
   vectors::encode_particle_header(set, std::span<std::byte, vectors::kParticleHeaderBytes>(file.data(), vectors::kParticleHeaderBytes));
   const std::size_t body = file.size() - vectors::kTrailerBytes;
   store_le<std::uint32_t>(file.data() + body, crc32(std::span<const std::byte>(file.data(), body)));
   return file;
+}
+
+// particle-table.gbt: the intensity measure needs a table with model
+// images: the same model with its focus stack's images (each depth drawn
+// centred, as the session's stack), to a smaller budget so that a firmware
+// image holds it beside its vectors.
+std::vector<std::byte> table_with_images(const VectorSceneOptions& o, const ModelStack& model, const BuildOptions& build,
+                                         std::int32_t extent) {
+  ModelStack with_images = model;
+  const auto stack_side = static_cast<std::uint16_t>(2 * extent + 1);
+  with_images.ref_x = with_images.ref_y = static_cast<float>(extent);
+  with_images.image_width = with_images.image_height = stack_side;
+  for (std::uint16_t d = 0; d < o.depths; ++d) {
+    app::Rng quiet(0);
+    with_images.images.push_back(render(model.depths[d], stack_side, static_cast<float>(extent), static_cast<float>(extent), 0.0f,
+                                        false, 0.0, quiet).pixels);
+  }
+  if (o.keep > 0) return build_table(with_images, build);
+  Budget budget;
+  budget.max_bytes = o.particle_table_budget_bytes;
+  BudgetReport report;
+  return build_table_to_budget(with_images, build, budget, report);
 }
 
 }  // namespace
@@ -317,7 +343,13 @@ VectorSceneSummary write_test_vectors(const VectorSceneOptions& o, const std::st
   std::vector<std::byte> file = step_vectors(o, model, table, set, rng, buffers, summary);
   std::vector<std::byte> screened_file;
   std::vector<std::byte> session_file = session_vectors(o, model, table, set, extent, rng, buffers, summary, screened_file);
-  const std::vector<std::byte> particle_file = particle_vectors(o, table, session_file, summary);
+  const std::vector<std::byte> particle_file = particle_vectors(o, table, session_file, summary.particle_frames_tracking);
+  const std::vector<std::byte> image_table_bytes = table_with_images(o, model, build, extent);
+  TableView image_table;
+  if (const Status s = TableView::open(image_table_bytes, image_table); s != Status::kOk)
+    throw app::Error(std::string("vectors: built image table invalid: ") + status_name(s));
+  const std::vector<std::byte> intensity_file =
+      particle_vectors(o, image_table, session_file, summary.particle_intensity_frames_tracking);
 
   std::filesystem::create_directories(dir);
   app::write_file((std::filesystem::path(dir) / "table.gbt").string(), table_bytes);
@@ -325,6 +357,9 @@ VectorSceneSummary write_test_vectors(const VectorSceneOptions& o, const std::st
   app::write_file((std::filesystem::path(dir) / "session.gbs").string(), session_file);
   app::write_file((std::filesystem::path(dir) / "session-screened.gbs").string(), screened_file);
   app::write_file((std::filesystem::path(dir) / "particle.gbp").string(), particle_file);
+  app::write_file((std::filesystem::path(dir) / "particle-table.gbt").string(), image_table_bytes);
+  app::write_file((std::filesystem::path(dir) / "particle-intensity.gbp").string(), intensity_file);
+  summary.particle_table_bytes = image_table_bytes.size();
   summary.particle_bytes = particle_file.size();
   summary.session_bytes = session_file.size();
   summary.model_points = model.depths[0].size();

@@ -5,7 +5,9 @@
 // track_step's (vectors.gbv), and a TrackingSession's over a longer sequence
 // in which the object is hidden for a while, with the model images as its
 // focus stack (session.gbs), and the particle tracker's over the session's
-// sequence (particle.gbp).
+// sequence: with the edge measure on that table (particle.gbp), and with the
+// intensity measure on the same model's table with images
+// (particle-table.gbt, particle-intensity.gbp).
 // The firmware embeds the same files, so the defaults are sized for an
 // STM32H7-class part (2 MiB flash, 512 KiB RAM): the table is built to a
 // budget of half the flash (table_budget.hpp), the other half holding the
@@ -32,6 +34,9 @@ struct VectorSceneOptions {
   std::uint32_t hidden_from = 4;
   std::uint32_t hidden_frames = 8;
   std::uint32_t particles = 1000;  // the particle tracker's (particle.gbp), 1..kMaxVectorParticles
+  // particle-table.gbt: the same model with its images, to this budget
+  // (with `keep`, that keep ratio instead).
+  std::uint64_t particle_table_budget_bytes = 256u << 10;
 };
 
 struct VectorSceneSummary {
@@ -48,10 +53,13 @@ struct VectorSceneSummary {
   bool session_reacquired = false;        // it found the object again after the occlusion
   std::size_t particle_bytes = 0;
   std::uint32_t particle_frames_tracking = 0;  // frames the particle tracker reported tracking
+  std::size_t particle_table_bytes = 0;
+  std::uint32_t particle_intensity_frames_tracking = 0;  // the same with the intensity measure
 };
 
-// Writes DIR/table.gbt, DIR/vectors.gbv, DIR/session.gbs, DIR/session-screened.gbs
-// and DIR/particle.gbp. Same options, same bytes.
+// Writes DIR/table.gbt, DIR/vectors.gbv, DIR/session.gbs, DIR/session-screened.gbs,
+// DIR/particle.gbp, DIR/particle-table.gbt and DIR/particle-intensity.gbp.
+// Same options, same bytes.
 VectorSceneSummary write_test_vectors(const VectorSceneOptions& options, const std::string& dir);
 
 }  // namespace gabarit::host
