@@ -223,6 +223,8 @@ void IntensityCorrelationMeasure::reset(const FocusStack& stack, std::uint32_t s
   ring_ = OutlineRing::kWhereItAgrees;
   surround_ = 0;
   count_ = 0;
+  object_count_ = 0;
+  for (auto& depth : model_sums_) depth[0] = depth[1] = {};
   if (samples == 0 || !valid_focus_stack(stack)) return;
   const std::uint32_t want = samples < 16 ? 16 : (samples > kMaxIntensityMeasureSamples ? kMaxIntensityMeasureSamples : samples);
   const ImageView& m = stack.images[0];
@@ -245,6 +247,40 @@ void IntensityCorrelationMeasure::reset(const FocusStack& stack, std::uint32_t s
   for (std::uint32_t v = 0; v < m.height; v += step)
     for (std::uint32_t u = 0; u < m.width && count_ < kMaxIntensityMeasureSamples; u += step)
       if (listed(u, v)) list_[count_++] = {static_cast<std::uint16_t>(u), static_cast<std::uint16_t>(v), !outline.flat() || outline.on_object(u, v)};
+  // The object's samples first, then the ring's: each part's sums then run
+  // in registers without a choice per sample. The sums are exact integers,
+  // so the order changes no score.
+  std::uint32_t front = 0, back = count_;
+  while (front < back) {
+    if (list_[front].object) {
+      ++front;
+    } else {
+      --back;
+      const Sample swapped = list_[front];
+      list_[front] = list_[back];
+      list_[back] = swapped;
+    }
+  }
+  object_count_ = front;
+  // The list's bounding box in the model, and each part's model sums at
+  // each depth (they do not depend on the frame when every sample lands in it).
+  sample_box_[0] = sample_box_[2] = list_[0].u;
+  sample_box_[1] = sample_box_[3] = list_[0].v;
+  for (std::uint32_t i = 0; i < count_; ++i) {
+    const Sample& s = list_[i];
+    if (s.u < sample_box_[0]) sample_box_[0] = s.u;
+    if (s.v < sample_box_[1]) sample_box_[1] = s.v;
+    if (s.u > sample_box_[2]) sample_box_[2] = s.u;
+    if (s.v > sample_box_[3]) sample_box_[3] = s.v;
+  }
+  for (std::size_t d = 0; d < stack.images.size() && d < kSummedDepths; ++d) {
+    for (std::uint32_t i = 0; i < count_; ++i) {
+      const std::uint64_t a = stack.images[d].at(list_[i].u, list_[i].v);
+      ModelSums& part = model_sums_[d][i < object_count_ ? 0 : 1];
+      part.a += a;
+      part.aa += a * a;
+    }
+  }
 }
 
 // The samples placed as walk_samples places them (16.16 positions, a 2.30
@@ -259,20 +295,66 @@ bool IntensityCorrelationMeasure::listed_correlation(const Pose& pose, OutlineRi
   const std::int64_t ref_x = round_scaled(stack_.ref_x, 16), ref_y = round_scaled(stack_.ref_y, 16);
   const std::int64_t x_limit = (std::int64_t{frame_.width} - 1) * 65536, y_limit = (std::int64_t{frame_.height} - 1) * 65536;
   const ImageView& m = stack_.images[pose.depth];
-  OutlineParts parts;
-  for (std::uint32_t i = 0; i < count_; ++i) {
-    const Sample& s = list_[i];
-    const std::int64_t du = (std::int64_t{s.u} << 16) - ref_x, dv = (std::int64_t{s.v} << 16) - ref_y;
+  // One part's samples, list_[begin, end), summed in locals.
+  const auto sum_part = [&](std::uint32_t begin, std::uint32_t end, FrameSums& frame_sums, ImageSums& model_sums) {
+    FrameSums fs;
+    ImageSums ms;
+    for (std::uint32_t i = begin; i < end; ++i) {
+      const Sample& s = list_[i];
+      const std::int64_t du = (std::int64_t{s.u} << 16) - ref_x, dv = (std::int64_t{s.v} << 16) - ref_y;
+      const std::int64_t px = x0 + mul_shift(c, du, 30) - mul_shift(sn, dv, 30);
+      const std::int64_t py = y0 + mul_shift(sn, du, 30) + mul_shift(c, dv, 30);
+      if (px < 0 || py < 0 || px >= x_limit || py >= y_limit) continue;
+      FrameSample at;
+      at.row0 = frame_.pixels + static_cast<std::size_t>(py >> 16) * frame_.stride + static_cast<std::size_t>(px >> 16);
+      at.row1 = at.row0 + frame_.stride;
+      at.wx = static_cast<std::uint32_t>(px >> 8) & 255u;
+      at.wy = static_cast<std::uint32_t>(py >> 8) & 255u;
+      add_sample(fs, ms, m.at(s.u, s.v), at.value());
+    }
+    frame_sums = fs;
+    model_sums = ms;
+  };
+  // Where every sample lands in the frame (the box's corners do: a sample's
+  // position is a monotone function of its column plus one of its row, so
+  // over the box it is extreme at a corner), the same sums without a bounds
+  // check per sample, the model's from the list's precomputed ones.
+  const auto inside = [&](std::uint16_t u, std::uint16_t v) {
+    const std::int64_t du = (std::int64_t{u} << 16) - ref_x, dv = (std::int64_t{v} << 16) - ref_y;
     const std::int64_t px = x0 + mul_shift(c, du, 30) - mul_shift(sn, dv, 30);
     const std::int64_t py = y0 + mul_shift(sn, du, 30) + mul_shift(c, dv, 30);
-    if (px < 0 || py < 0 || px >= x_limit || py >= y_limit) continue;
-    FrameSample at;
-    at.row0 = frame_.pixels + static_cast<std::size_t>(py >> 16) * frame_.stride + static_cast<std::size_t>(px >> 16);
-    at.row1 = at.row0 + frame_.stride;
-    at.wx = static_cast<std::uint32_t>(px >> 8) & 255u;
-    at.wy = static_cast<std::uint32_t>(py >> 8) & 255u;
-    add_sample(s.object ? parts.object_frame : parts.ring_frame, s.object ? parts.object_model : parts.ring_model, m.at(s.u, s.v),
-               at.value());
+    return px >= 0 && py >= 0 && px < x_limit && py < y_limit;
+  };
+  const auto sum_inside = [&](std::uint32_t begin, std::uint32_t end, const ModelSums& model, FrameSums& frame_sums,
+                              ImageSums& model_sums) {
+    std::uint64_t b_sum = 0, bb = 0, ab = 0;
+    for (std::uint32_t i = begin; i < end; ++i) {
+      const Sample& s = list_[i];
+      const std::int64_t du = (std::int64_t{s.u} << 16) - ref_x, dv = (std::int64_t{s.v} << 16) - ref_y;
+      const std::int64_t px = x0 + mul_shift(c, du, 30) - mul_shift(sn, dv, 30);
+      const std::int64_t py = y0 + mul_shift(sn, du, 30) + mul_shift(c, dv, 30);
+      FrameSample at;
+      at.row0 = frame_.pixels + static_cast<std::size_t>(py >> 16) * frame_.stride + static_cast<std::size_t>(px >> 16);
+      at.row1 = at.row0 + frame_.stride;
+      at.wx = static_cast<std::uint32_t>(px >> 8) & 255u;
+      at.wy = static_cast<std::uint32_t>(py >> 8) & 255u;
+      const std::uint64_t b = at.value(), a = m.at(s.u, s.v);
+      b_sum += b;
+      bb += b * b;
+      ab += a * b;
+    }
+    frame_sums = {end - begin, b_sum, bb};
+    model_sums = {model.a, model.aa, ab};
+  };
+  OutlineParts parts;
+  const auto& box = sample_box_;
+  if (pose.depth < kSummedDepths && inside(box[0], box[1]) && inside(box[2], box[1]) && inside(box[0], box[3]) &&
+      inside(box[2], box[3])) {
+    sum_inside(0, object_count_, model_sums_[pose.depth][0], parts.object_frame, parts.object_model);
+    sum_inside(object_count_, count_, model_sums_[pose.depth][1], parts.ring_frame, parts.ring_model);
+  } else {
+    sum_part(0, object_count_, parts.object_frame, parts.object_model);
+    sum_part(object_count_, count_, parts.ring_frame, parts.ring_model);
   }
   FrameSums f;
   ImageSums sums;

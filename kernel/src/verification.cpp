@@ -19,7 +19,13 @@ float correlation_from_signed_square(float signed_r2) noexcept {
   const float s = signed_r2 < 0.0f ? -signed_r2 : signed_r2;
   if (!(s > 0.0f)) return 0.0f;
   float x = s < 1.0f ? 0.5f * (1.0f + s) : s;  // above the root: Newton then descends to it
-  for (int i = 0; i < 12; ++i) x = 0.5f * (x + s / x);
+  // At most 12 steps; a step that changes nothing has reached a fixed point,
+  // which every later step would keep: stopping there gives the same bits.
+  for (int i = 0; i < 12; ++i) {
+    const float next = 0.5f * (x + s / x);
+    if (next == x) break;
+    x = next;
+  }
   return signed_r2 < 0.0f ? -x : x;
 }
 

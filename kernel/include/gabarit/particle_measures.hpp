@@ -222,7 +222,18 @@ class IntensityCorrelationMeasure {
   OutlineRing ring_ = OutlineRing::kWhereItAgrees;
   std::uint8_t surround_ = 0;
   std::uint32_t count_ = 0;
+  std::uint32_t object_count_ = 0;  // list_[0, object_count_) on the object, the rest on its ring
   Sample list_[kMaxIntensityMeasureSamples];
+  // The list's bounding box (u min, v min, u max, v max), and the model's
+  // sums of each part (object, ring) at each of the first kSummedDepths
+  // depths: a particle whose every sample lands in the frame needs only the
+  // frame's sums.
+  static constexpr std::size_t kSummedDepths = 16;
+  struct ModelSums {
+    std::uint64_t a = 0, aa = 0;
+  };
+  std::uint16_t sample_box_[4] = {0, 0, 0, 0};
+  ModelSums model_sums_[kSummedDepths][2] = {};
 };
 
 // The filter gabarit track --tracker particle runs on a table with model
