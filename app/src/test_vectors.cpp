@@ -95,6 +95,15 @@ Status check_size_and_crc(std::span<const std::byte> bytes, std::size_t size) no
   return crc32(bytes.first(body)) == load_le<std::uint32_t>(bytes.data() + body) ? Status::kOk : Status::kBadChecksum;
 }
 
+// Points `set`'s frames and expected records into `bytes` (already checked
+// to be exactly the format's size): the frames from `at`, the records after.
+template <class Set>
+void place_frames(std::span<const std::byte> bytes, std::size_t at, std::size_t record_bytes, Set& set) noexcept {
+  const std::size_t pixels = std::size_t{set.frame_count} * set.width * set.height;
+  set.frames = bytes.subspan(at, pixels);
+  set.expected = bytes.subspan(at + pixels, std::size_t{set.frame_count} * record_bytes);
+}
+
 // The first field where two records differ, or false.
 template <std::size_t N>
 bool first_difference(const std::byte* expected, const std::byte* actual, const Field (&fields)[N], std::uint32_t frame,
@@ -121,9 +130,7 @@ Status open_vectors(std::span<const std::byte> bytes, VectorSet& out) noexcept {
   VectorSet set;
   if (!load_common(bytes.data(), set)) return Status::kBadHeaderField;
   GABARIT_TRY(check_size_and_crc(bytes, file_bytes(set.frame_count, set.width, set.height)));
-  const std::size_t pixels = std::size_t{set.frame_count} * set.width * set.height;
-  set.frames = bytes.subspan(kHeaderBytes, pixels);
-  set.expected = bytes.subspan(kHeaderBytes + pixels, std::size_t{set.frame_count} * kRecordBytes);
+  place_frames(bytes, kHeaderBytes, kRecordBytes, set);
   out = set;
   return Status::kOk;
 }
@@ -184,10 +191,8 @@ Status open_session_vectors(std::span<const std::byte> bytes, SessionVectorSet& 
   GABARIT_TRY(check_size_and_crc(
       bytes, session_file_bytes(set.frame_count, set.width, set.height, set.stack_depths, set.stack_width, set.stack_height)));
   const std::size_t stack = std::size_t{set.stack_depths} * set.stack_width * set.stack_height;
-  const std::size_t pixels = std::size_t{set.frame_count} * set.width * set.height;
   set.stack = bytes.subspan(kSessionHeaderBytes, stack);
-  set.frames = bytes.subspan(kSessionHeaderBytes + stack, pixels);
-  set.expected = bytes.subspan(kSessionHeaderBytes + stack + pixels, std::size_t{set.frame_count} * kSessionRecordBytes);
+  place_frames(bytes, kSessionHeaderBytes + stack, kSessionRecordBytes, set);
   out = set;
   return Status::kOk;
 }
@@ -295,9 +300,7 @@ Status open_particle_vectors(std::span<const std::byte> bytes, ParticleVectorSet
                                         : set.intensity_samples == 0);
   if (!common_ok || (flags & ~3u) != 0 || !filter_ok) return Status::kBadHeaderField;
   GABARIT_TRY(check_size_and_crc(bytes, particle_file_bytes(set.frame_count, set.width, set.height)));
-  const std::size_t pixels = std::size_t{set.frame_count} * set.width * set.height;
-  set.frames = bytes.subspan(kParticleHeaderBytes, pixels);
-  set.expected = bytes.subspan(kParticleHeaderBytes + pixels, std::size_t{set.frame_count} * kParticleRecordBytes);
+  place_frames(bytes, kParticleHeaderBytes, kParticleRecordBytes, set);
   out = set;
   return Status::kOk;
 }

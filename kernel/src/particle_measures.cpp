@@ -224,6 +224,7 @@ void IntensityCorrelationMeasure::reset(const FocusStack& stack, std::uint32_t s
   surround_ = 0;
   count_ = 0;
   object_count_ = 0;
+  grid_columns_ = grid_rows_ = 0;
   for (auto& depth : model_sums_) depth[0] = depth[1] = {};
   if (samples == 0 || !valid_focus_stack(stack)) return;
   const std::uint32_t want = samples < 16 ? 16 : (samples > kMaxIntensityMeasureSamples ? kMaxIntensityMeasureSamples : samples);
@@ -272,6 +273,18 @@ void IntensityCorrelationMeasure::reset(const FocusStack& stack, std::uint32_t s
     if (s.v < sample_box_[1]) sample_box_[1] = s.v;
     if (s.u > sample_box_[2]) sample_box_[2] = s.u;
     if (s.v > sample_box_[3]) sample_box_[3] = s.v;
+  }
+  // The grid's lines over the box: a particle places each column's and each
+  // row's rotated offset once, and each sample adds its column's and row's.
+  grid_columns_ = (sample_box_[2] - sample_box_[0]) / step + 1u;
+  grid_rows_ = (sample_box_[3] - sample_box_[1]) / step + 1u;
+  if (grid_columns_ > kGridLines || grid_rows_ > kGridLines) {
+    grid_columns_ = grid_rows_ = 0;
+  } else {
+    for (std::uint32_t i = 0; i < count_; ++i) {
+      list_[i].column = static_cast<std::uint8_t>((list_[i].u - sample_box_[0]) / step);
+      list_[i].row = static_cast<std::uint8_t>((list_[i].v - sample_box_[1]) / step);
+    }
   }
   for (std::size_t d = 0; d < stack.images.size() && d < kSummedDepths; ++d) {
     for (std::uint32_t i = 0; i < count_; ++i) {
@@ -325,14 +338,29 @@ bool IntensityCorrelationMeasure::listed_correlation(const Pose& pose, OutlineRi
     const std::int64_t py = y0 + mul_shift(sn, du, 30) + mul_shift(c, dv, 30);
     return px >= 0 && py >= 0 && px < x_limit && py < y_limit;
   };
+  // The grid's columns' and rows' rotated offsets (a sample's position is
+  // its column's plus its row's, the very sums it would compute itself).
+  std::int64_t column_x[kGridLines], column_y[kGridLines], row_x[kGridLines], row_y[kGridLines];
+  const auto place_grid = [&] {
+    const std::uint32_t step = stack_.step;
+    for (std::uint32_t k = 0; k < grid_columns_; ++k) {
+      const std::int64_t du = (std::int64_t{sample_box_[0] + k * step} << 16) - ref_x;
+      column_x[k] = mul_shift(c, du, 30);
+      column_y[k] = mul_shift(sn, du, 30);
+    }
+    for (std::uint32_t k = 0; k < grid_rows_; ++k) {
+      const std::int64_t dv = (std::int64_t{sample_box_[1] + k * step} << 16) - ref_y;
+      row_x[k] = mul_shift(sn, dv, 30);
+      row_y[k] = mul_shift(c, dv, 30);
+    }
+  };
   const auto sum_inside = [&](std::uint32_t begin, std::uint32_t end, const ModelSums& model, FrameSums& frame_sums,
                               ImageSums& model_sums) {
     std::uint64_t b_sum = 0, bb = 0, ab = 0;
     for (std::uint32_t i = begin; i < end; ++i) {
       const Sample& s = list_[i];
-      const std::int64_t du = (std::int64_t{s.u} << 16) - ref_x, dv = (std::int64_t{s.v} << 16) - ref_y;
-      const std::int64_t px = x0 + mul_shift(c, du, 30) - mul_shift(sn, dv, 30);
-      const std::int64_t py = y0 + mul_shift(sn, du, 30) + mul_shift(c, dv, 30);
+      const std::int64_t px = x0 + column_x[s.column] - row_x[s.row];
+      const std::int64_t py = y0 + column_y[s.column] + row_y[s.row];
       FrameSample at;
       at.row0 = frame_.pixels + static_cast<std::size_t>(py >> 16) * frame_.stride + static_cast<std::size_t>(px >> 16);
       at.row1 = at.row0 + frame_.stride;
@@ -348,8 +376,9 @@ bool IntensityCorrelationMeasure::listed_correlation(const Pose& pose, OutlineRi
   };
   OutlineParts parts;
   const auto& box = sample_box_;
-  if (pose.depth < kSummedDepths && inside(box[0], box[1]) && inside(box[2], box[1]) && inside(box[0], box[3]) &&
+  if (grid_columns_ > 0 && pose.depth < kSummedDepths && inside(box[0], box[1]) && inside(box[2], box[1]) && inside(box[0], box[3]) &&
       inside(box[2], box[3])) {
+    place_grid();
     sum_inside(0, object_count_, model_sums_[pose.depth][0], parts.object_frame, parts.object_model);
     sum_inside(object_count_, count_, model_sums_[pose.depth][1], parts.ring_frame, parts.ring_model);
   } else {

@@ -3,14 +3,14 @@
 # corpora for every fuzz target, made by the project's own tools (nothing
 # committed): tables (make_table_seeds: valid ones and one per loader error),
 # Y4M and PGM from `gabarit synth`, points and pose CSVs from synth, track and
-# by hand, HIL link streams (make_link_seeds).
+# by hand, HIL link streams (make_link_seeds), test vectors from `gabarit vectors`.
 set -euo pipefail
 g=${1:?usage: make_corpora.sh GABARIT MAKE_TABLE_SEEDS OUTDIR}
 seeds=${2:?}
 out=${3:?}
 link_seeds=${4:?}
 rm -rf "$out"
-mkdir -p "$out"/{table,y4m,pgm,points_csv,pose_csv,link,board_map,session_profile}
+mkdir -p "$out"/{table,y4m,pgm,points_csv,pose_csv,link,board_map,session_profile,vectors}
 "$link_seeds" "$out/link"
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
@@ -42,4 +42,10 @@ printf 'name: b\nrelay: x\ngpio:\n  lock: 99999\n' > "$out/board_map/bad-line.ya
 printf 'gabarit-session-profile 1\n# tuned\nplain = true\nrecover = true\nsearch-budget = 40\n' > "$out/session_profile/short.profile"
 printf 'gabarit-session-profile 1\nplain = true\nrecovery = particle\n' > "$out/session_profile/needs-recovery.profile"
 printf 'gabarit-session-profile 1\nwithout = modes,all\nseed = 18446744073709551615\n' > "$out/session_profile/bad-seed.profile"
+# Test vectors: a small set from `gabarit vectors` (one frame, two session
+# frames, ten particles), and a truncated one.
+"$g" vectors --out "$work/vec" --points 100 --depths 1 --frames 1 --session-frames 2 --hidden 1,1 --particles 10 \
+    --table-bytes 8192 2> /dev/null
+cp "$work/vec/vectors.gbv" "$work/vec/session.gbs" "$work/vec/particle.gbp" "$work/vec/particle-intensity.gbp" "$out/vectors/"
+head -c 100 "$work/vec/particle.gbp" > "$out/vectors/truncated.gbp"
 echo "make_corpora: $(find "$out" -type f | wc -l) seeds in $out"

@@ -212,7 +212,12 @@ class IntensityCorrelationMeasure {
   struct Sample {
     std::uint16_t u = 0, v = 0;  // model pixel
     bool object = false;         // on the object (else on its ring)
+    // Its column and row of the sampling grid within the list's bounding
+    // box ((u - box u min) / step, likewise v), when the box spans at most
+    // kGridLines of each.
+    std::uint8_t column = 0, row = 0;
   };
+  static constexpr std::uint32_t kGridLines = 128;
   // The correlation over the list: false where fewer than 16 samples fall
   // in the frame or a side is flat; `ring_compared` as correlation_at's.
   bool listed_correlation(const Pose& pose, OutlineRing ring, float& signed_r2, bool& ring_compared) const noexcept;
@@ -233,6 +238,7 @@ class IntensityCorrelationMeasure {
     std::uint64_t a = 0, aa = 0;
   };
   std::uint16_t sample_box_[4] = {0, 0, 0, 0};
+  std::uint32_t grid_columns_ = 0, grid_rows_ = 0;  // 0: the box spans more than kGridLines
   ModelSums model_sums_[kSummedDepths][2] = {};
 };
 
