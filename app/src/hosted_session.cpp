@@ -15,13 +15,24 @@ const SessionProfile& checked(const SessionProfile& profile) {
   return profile;
 }
 
+// The profile as it runs on `table`: the recovery stage and the particle
+// tracker's measure resolved (CAPS reports them so).
+SessionProfile resolved(const SessionProfile& profile, const TableView& table, const std::optional<Detector>& detector) {
+  SessionProfile p = resolve_recovery(
+      checked(profile), table.has_model_images() && (detector ? *detector : detector_of(table)).kind != table_format::DetectorKind::kBinary);
+  if (p.tracker == TrackerKind::kParticle) {
+    p.particle_measure = resolved_measure(p.particle_measure, table.has_model_images());
+    if (p.particle_measure == ParticleMeasureKind::kIntensity && !table.has_model_images())
+      throw Error("particle filter: the intensity measure needs a table with model images (tables build from images stores them)");
+  }
+  return p;
+}
+
 }  // namespace
 
 HostedSession::HostedSession(const TableView& table, const SessionProfile& profile, SessionExtras extras)
     : table_(table),
-      profile_(resolve_recovery(checked(profile), table.has_model_images() &&
-                                                      (extras.detector ? *extras.detector : detector_of(table)).kind !=
-                                                          table_format::DetectorKind::kBinary)),
+      profile_(resolved(profile, table, extras.detector)),
       extras_(std::move(extras)),
       options_(extras_.research_options ? *extras_.research_options : session_options(profile_)),
       detector_(extras_.detector ? *extras_.detector : detector_of(table)),
@@ -60,6 +71,14 @@ bool HostedSession::start(const Pose& initial) {
   detection_.reset();  // the recovery stages start afresh with the session
   particle_recovery_.reset();
   particles_.reset();
+  particle_started_ = false;
+  if (profile_.tracker == TrackerKind::kParticle) {
+    // The pose checks the session's start makes (pose_in_range, the depth).
+    if (!pose_in_range(initial) || initial.depth >= table_.depth_count()) return false;
+    start_pose_ = initial;
+    particle_started_ = true;
+    return true;
+  }
   session_.emplace(table_, extras_.coarse, detector_);
   if (session_->start(options_, initial) != Status::kOk) {
     session_.reset();
@@ -109,7 +128,24 @@ bool HostedSession::start_by_detection(const ImageView& frame) {
   return true;
 }
 
+Status HostedSession::particle_step(const ImageView& frame, SessionResult& out) {
+  if (!particles_) {
+    // As gabarit track --tracker particle runs it (run_particle_tracking): built at the first frame, for its size.
+    ParticleRunOptions po = particle_run_options(profile_);
+    po.voter = extras_.voter;
+    po.detector = extras_.detector;
+    particles_ = std::make_unique<ParticleTracker>(table_, frame.width, frame.height, po);
+    particles_->start(start_pose_);
+    particle_width_ = frame.width, particle_height_ = frame.height;
+  } else if (frame.width != particle_width_ || frame.height != particle_height_) {
+    return Status::kInvalidArgument;
+  }
+  out = particle_session_result(particles_->step(frame), particles_->core().ledger());
+  return Status::kOk;
+}
+
 Status HostedSession::step(const ImageView& frame, SessionResult& out) {
+  if (profile_.tracker == TrackerKind::kParticle) return particle_started_ ? particle_step(frame, out) : Status::kInvalidArgument;
   if (!session_) return Status::kInvalidArgument;
   fit_frame(frame.width, frame.height);
   return session_->step(frame, buffers_.scratch(), out);

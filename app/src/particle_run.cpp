@@ -20,8 +20,7 @@ const char* name_of(ParticleMeasureKind kind) noexcept {
 }
 
 ParticleMeasureKind resolved_measure(ParticleMeasureKind kind, const TableView& table) noexcept {
-  if (kind != ParticleMeasureKind::kAuto) return kind;
-  return table.has_model_images() ? ParticleMeasureKind::kIntensity : ParticleMeasureKind::kEdges;
+  return resolved_measure(kind, table.has_model_images());
 }
 
 ParticleRunOptions particle_run_options(const SessionProfile& profile) {
@@ -32,6 +31,10 @@ ParticleRunOptions particle_run_options(const SessionProfile& profile) {
   o.edge_tolerance = profile.edge_tolerance;
   o.filter = particle_filter_options(profile.particle_improvements_off);
   o.filter.mode_clustering = profile.particle_clustering;
+  o.measure = profile.particle_measure;
+  // The stencil measure alone: one vote per frame and no edge map, modes
+  // ranked by weight, confidence from the vote.
+  if (o.measure == ParticleMeasureKind::kStencil) o.finer = false;
   return o;
 }
 
@@ -132,11 +135,11 @@ void ParticleTracker::start(const Pose& initial) {
   if (s != Status::kOk) throw app::Error(std::string("particle filter: start failed: ") + status_name(s));
 }
 
-ParticleEstimate ParticleTracker::step(const app::GrayImage& frame) {
+ParticleEstimate ParticleTracker::step(const ImageView& frame) {
   ParticleEstimate e;
-  const Status s = parts_->edge_filter        ? parts_->edge_filter->step(frame.view(), e)
-                   : parts_->intensity_filter ? parts_->intensity_filter->step(frame.view(), e)
-                                              : parts_->stencil_filter->step(frame.view(), e);
+  const Status s = parts_->edge_filter        ? parts_->edge_filter->step(frame, e)
+                   : parts_->intensity_filter ? parts_->intensity_filter->step(frame, e)
+                                              : parts_->stencil_filter->step(frame, e);
   if (s != Status::kOk) throw app::Error(std::string("particle filter: step failed: ") + status_name(s));
   return e;
 }
@@ -160,21 +163,16 @@ void run_particle_tracking(const TableView& table, app::FrameSource& frames, con
     const auto start = std::chrono::steady_clock::now();
     const ParticleEstimate e = tracker->step(frame);
     const auto stop = std::chrono::steady_clock::now();
+    // The row from the session's form of the estimate (session_profile.hpp), as HostedSession reports it.
+    const SessionResult result = particle_session_result(e, tracker->core().ledger());
     app::TrackRow row;
     row.frame = index;
-    row.step.pose = e.pose;
-    row.step.score = e.score;
-    row.step.state = e.state;
-    row.confidence = e.state == TrackState::kTracking ? Confidence::kHigh
-                     : e.state == TrackState::kUncertain ? Confidence::kIntermediate
-                                                         : Confidence::kNone;
+    row.step = result.step;
+    row.confidence = result.confidence;
     row.micros = std::chrono::duration<double, std::micro>(stop - start).count();
     row.io_micros = std::chrono::duration<double, std::micro>(start - reading).count();
     row.has_ledger = true;
-    row.ledger = tracker->core().ledger();
-    // The frame's vote is the proposals' (none without a proposer).
-    row.step.features = static_cast<std::uint32_t>(row.ledger.features);
-    row.step.votes = row.ledger.votes;
+    row.ledger = result.ledger;
     on_row(row);
   }
 }

@@ -18,6 +18,24 @@ ParticleFilterOptions particle_filter_options(std::uint32_t off) noexcept {
   return o;
 }
 
+SessionResult particle_session_result(const ParticleEstimate& e, const FrameLedger& ledger) noexcept {
+  SessionResult out;
+  out.pose = e.pose;
+  out.step.pose = e.pose;
+  out.step.score = e.score;
+  out.step.state = e.state;
+  out.state = e.state;
+  out.score = e.score;
+  out.confidence = e.state == TrackState::kTracking    ? Confidence::kHigh
+                   : e.state == TrackState::kUncertain ? Confidence::kIntermediate
+                                                       : Confidence::kNone;
+  out.ledger = ledger;
+  out.step.features = static_cast<std::uint32_t>(ledger.features);
+  out.step.votes = ledger.votes;
+  out.work = ledger.total_work();
+  return out;
+}
+
 Status validate(const SessionProfile& p) noexcept {
   const auto within = [](std::uint64_t v, std::uint64_t lo, std::uint64_t hi) { return v >= lo && v <= hi; };
   const bool numbers = within(p.search_budget, 0, kSearchPlacementCount - kSearchNear) && within(p.search_interval, 1, 100) &&
@@ -27,11 +45,15 @@ Status validate(const SessionProfile& p) noexcept {
                        (p.particle_improvements_off & ~kKnownImprovements) == 0 &&
                        static_cast<std::uint8_t>(p.particle_clustering) <= static_cast<std::uint8_t>(ModeClustering::kRunningMean);
   const bool kinds = static_cast<std::uint8_t>(p.recovery) <= static_cast<std::uint8_t>(RecoveryKind::kAuto) &&
-                     static_cast<std::uint8_t>(p.subcell) <= static_cast<std::uint8_t>(SubCellKind::kAlignment);
+                     static_cast<std::uint8_t>(p.subcell) <= static_cast<std::uint8_t>(SubCellKind::kAlignment) &&
+                     static_cast<std::uint8_t>(p.tracker) <= static_cast<std::uint8_t>(TrackerKind::kParticle) &&
+                     static_cast<std::uint8_t>(p.particle_measure) <= static_cast<std::uint8_t>(ParticleMeasureKind::kIntensity);
+  // The particle tracker is not the thesis's loop; a measure names the particle tracker's.
+  const bool tracker = p.tracker == TrackerKind::kParticle ? !p.plain : p.particle_measure == ParticleMeasureKind::kAuto;
   const bool parts = (p.plain || (!p.motion_filter && !p.refine && !p.recover)) &&
                      (!needs_recovery(p.recovery) || recovers(p)) &&
                      (p.subcell == SubCellKind::kParabola || refines(p));
-  return numbers && kinds && parts ? Status::kOk : Status::kInvalidArgument;
+  return numbers && kinds && parts && tracker ? Status::kOk : Status::kInvalidArgument;
 }
 
 SessionProfile resolve_recovery(const SessionProfile& profile, bool verifying_table) noexcept {
@@ -81,9 +103,18 @@ bool default_numbers(const SessionProfile& p) noexcept {
          p.particle_clustering == d.particle_clustering;
 }
 
+// The particle tracker's bits: its measure as the device resolved it.
+std::uint32_t particle_tracker_bits(const SessionProfile& p) noexcept {
+  std::uint32_t bits = link::kModeParticleTracker;
+  bits |= (static_cast<std::uint32_t>(p.particle_measure) << link::kModeParticleMeasureShift) & link::kModeParticleMeasureMask;
+  if (!default_numbers(p)) bits |= link::kModeTuned;
+  return bits;
+}
+
 }  // namespace
 
 std::uint32_t mode_bits(const SessionProfile& p, bool shares_search, bool has_stack) noexcept {
+  if (p.tracker == TrackerKind::kParticle) return particle_tracker_bits(p);
   std::uint32_t bits = 0;
   if (!p.plain) bits |= link::kModeSession;
   if (recovers(p) && p.shared_search && shares_search) bits |= link::kModeSharedSearch;
@@ -101,6 +132,11 @@ std::uint32_t mode_bits(const SessionProfile& p, bool shares_search, bool has_st
 
 SessionProfile profile_from_mode_bits(std::uint32_t bits) noexcept {
   SessionProfile p;
+  if ((bits & link::kModeParticleTracker) != 0) {
+    p.tracker = TrackerKind::kParticle;
+    p.particle_measure = static_cast<ParticleMeasureKind>((bits & link::kModeParticleMeasureMask) >> link::kModeParticleMeasureShift);
+    return p;
+  }
   p.plain = (bits & link::kModeSession) == 0;
   p.shared_search = (bits & link::kModeSharedSearch) != 0;
   p.focus_stack = (bits & link::kModeFocusStack) != 0;

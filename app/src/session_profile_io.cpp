@@ -39,6 +39,30 @@ RecoveryKind parse_recovery(const std::string& text, const std::string& what) {
   throw UsageError(what + " '" + text + "': want auto, grid, detect or particle");
 }
 
+TrackerKind parse_tracker(const std::string& text, const std::string& what) {
+  if (text == "stencil") return TrackerKind::kStencil;
+  if (text == "particle") return TrackerKind::kParticle;
+  throw UsageError(what + " '" + text + "': want stencil or particle");
+}
+
+const char* measure_name(ParticleMeasureKind kind) {
+  switch (kind) {
+    case ParticleMeasureKind::kAuto: return "auto";
+    case ParticleMeasureKind::kEdges: return "edges";
+    case ParticleMeasureKind::kStencil: return "stencil";
+    case ParticleMeasureKind::kIntensity: return "intensity";
+  }
+  return "auto";
+}
+
+ParticleMeasureKind parse_measure(const std::string& text, const std::string& what) {
+  if (text == "auto") return ParticleMeasureKind::kAuto;
+  if (text == "edges") return ParticleMeasureKind::kEdges;
+  if (text == "stencil") return ParticleMeasureKind::kStencil;
+  if (text == "intensity") return ParticleMeasureKind::kIntensity;
+  throw UsageError(what + " '" + text + "': want auto, intensity, edges or stencil");
+}
+
 SubCellKind parse_subcell(const std::string& text, const std::string& what) {
   if (text == "parabola") return SubCellKind::kParabola;
   if (text == "alignment") return SubCellKind::kAlignment;
@@ -84,6 +108,10 @@ struct Key {
 std::string yes(bool b) { return b ? "true" : "false"; }
 
 const Key kKeys[] = {
+    {"tracker", [](const SessionProfile& p) { return std::string(p.tracker == TrackerKind::kParticle ? "particle" : "stencil"); },
+     [](SessionProfile& p, const std::string& v, const std::string& w) { p.tracker = parse_tracker(v, w); }},
+    {"measure", [](const SessionProfile& p) { return std::string(measure_name(p.particle_measure)); },
+     [](SessionProfile& p, const std::string& v, const std::string& w) { p.particle_measure = parse_measure(v, w); }},
     {"plain", [](const SessionProfile& p) { return yes(p.plain); },
      [](SessionProfile& p, const std::string& v, const std::string& w) { p.plain = parse_bool(v, w); }},
     {"motion-filter", [](const SessionProfile& p) { return yes(p.motion_filter); },
@@ -171,6 +199,9 @@ std::string_view trim(std::string_view s) {
 // The session's parts that only the thesis's loop can leave out.
 void check(const SessionProfile& p, const std::string& origin) {
   if (validate(p) == Status::kOk) return;
+  if (p.tracker == TrackerKind::kParticle && p.plain) throw UsageError(origin + "tracker particle is not the thesis's loop: drop plain");
+  if (p.tracker == TrackerKind::kStencil && p.particle_measure != ParticleMeasureKind::kAuto)
+    throw UsageError(origin + "measure applies to tracker particle");
   if (needs_recovery(p.recovery) && !recovers(p))
     throw UsageError(origin + "recovery " + recovery_name(p.recovery) + " needs recovery: drop plain or add recover");
   if (p.subcell != SubCellKind::kParabola && !refines(p))
@@ -260,6 +291,13 @@ std::vector<Option> session_option_group() {
   const std::string indent = "\n                          ";
   return {
       {"--profile", "FILE", "a session profile (docs/file-formats.md) to start from; the options below change it"},
+      {"--tracker", "stencil|particle", "stencil (default): the stencil session; particle: the thesis's" + indent +
+                                            "particle filter (chapter 3, docs/particle-filter.md) with the table's model"},
+      {"--measure", "auto|intensity|edges|stencil", "--tracker particle: the session's verified score (the model image's" + indent +
+                                                   "correlation with the frame on at most 256 of its samples; the default" + indent +
+                                                   "for a table with model images), edge correlation over the table's" + indent +
+                                                   "model points (the default without), or the stencil vote of each" + indent +
+                                                   "particle's cell"},
       {"--plain", "", "the thesis's loop: the best cell of each frame, no filter, refinement, recovery or" + indent +
                           "focus stack (add --motion-filter, --refine or --recover to it one by one)"},
       {"--motion-filter", "", "with --plain: predict the ROI, gate candidates, grade confidence (default on)"},
@@ -317,6 +355,18 @@ SessionProfile read_session_profile(const Args& args) {
   const auto number = [&](const char* option, const char* key) {
     if (args.has(option)) find_key(key)->set(p, args.get(option), option);
   };
+  if (args.has("--tracker")) p.tracker = parse_tracker(args.get("--tracker"), "--tracker");
+  if (args.has("--measure")) {
+    if (p.tracker != TrackerKind::kParticle) throw UsageError("--measure applies to --tracker particle");
+    p.particle_measure = parse_measure(args.get("--measure"), "--measure");
+  }
+  if (p.tracker == TrackerKind::kParticle) {
+    // The stencil session's choices name nothing the particle tracker runs.
+    for (const char* option : {"--plain", "--motion-filter", "--refine", "--recover", "--recovery", "--subcell", "--search-budget",
+                               "--screen-stride", "--search-interval", "--no-focus-stack", "--no-verify", "--detect-after",
+                               "--recovery-frames", "--survey-frames", "--verify-refine"})
+      if (args.has(option)) throw UsageError(std::string(option) + " applies to the stencil tracker, not --tracker particle");
+  }
   if (args.has("--plain")) p.plain = true;
   if (p.plain) {  // without --plain these name parts that are on anyway
     if (args.has("--motion-filter")) p.motion_filter = true;
@@ -346,7 +396,7 @@ SessionProfile read_session_profile(const Args& args) {
       throw UsageError(std::string(option) + " applies to --recovery detect (and auto)");
   for (const char* option : {"--particles", "--seed", "--without", "--edge-stride", "--edge-tolerance",
                              "--mode-clustering"}) {
-    if (p.recovery != RecoveryKind::kParticles && args.has(option) && args.get_or("--tracker", "stencil") != "particle")
+    if (p.recovery != RecoveryKind::kParticles && args.has(option) && p.tracker != TrackerKind::kParticle)
       throw UsageError(std::string(option) + " applies to --tracker particle and --recovery particle");
   }
   if (needs_recovery(p.recovery) && !recovers(p))

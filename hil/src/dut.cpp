@@ -55,8 +55,8 @@ class InprocessDut final : public DutDriver {
   std::chrono::milliseconds default_hang_timeout() const override { return std::chrono::milliseconds(5000); }
   std::chrono::milliseconds stall_interval() const override { return std::chrono::milliseconds(5); }
   std::string description() const override {
-    return std::string("the kernel's TrackingSession on a thread, behind ") + (options_.udp ? "UDP on 127.0.0.1" : "a loopback link") +
-           (options_.profile.plain ? " (plain loop)" : "");
+    return std::string("the session profile (app::HostedSession) on a thread, behind ") + (options_.udp ? "UDP on 127.0.0.1" : "a loopback link") +
+           (options_.profile.tracker == app::TrackerKind::kParticle ? " (particle tracker)" : options_.profile.plain ? " (plain loop)" : "");
   }
 
   void start() override {

@@ -6,7 +6,7 @@ Usage: firmware_report.py --build DIR --map FIRMWARE.map [--flash-budget BYTES] 
        firmware_report.py --self-test
 
 Stack: reads the call graphs GCC writes with -fcallgraph-info=su (one .ci
-file per object under DIR), joins them across files and computes, for the
+file per object under DIR, less the other firmware images' objects), joins them across files and computes, for the
 firmware entry (Reset_Handler) and every kernel entry point, the deepest
 chain of frames. Fails on recursion (a cycle), on a frame GCC marks dynamic
 or bounded (alloca/VLA), on an indirect call, and when the firmware's worst
@@ -40,9 +40,21 @@ EDGE = re.compile(r'edge: \{ sourcename: "([^"]+)" targetname: "([^"]+)"')
 FRAME = re.compile(r'\\n(\d+) bytes \((static|dynamic|dynamic,bounded)\)')
 
 
-def load_graph(build_dir):
+def other_image(ci, image):
+    """Whether a call-graph file belongs to another firmware image than
+    `image` (the objects under CMakeFiles/IMAGE.dir): each image defines its
+    own app_main, and joined they would be one node with one image's frame."""
+    if image is None:
+        return False
+    dirs = [part[:-4] for part in ci.parts if part.endswith(".dir")]
+    return any(d.startswith("gabarit-firmware") and d != image for d in dirs)
+
+
+def load_graph(build_dir, image=None):
     frames, names, edges, kinds = {}, {}, {}, {}
     for ci in sorted(pathlib.Path(build_dir).rglob("*.ci")):
+        if other_image(ci, image):
+            continue
         text = ci.read_text()
         for title, label in NODE.findall(text):
             m = FRAME.search(label)
@@ -208,7 +220,8 @@ def main():
     sizes, symbols = map_sections(args.map)
     size = lambda s: sizes.get(s, (0, 0))[1]
     stack_budget = size(".stack")
-    frames, names, edges, kinds = load_graph(args.build)
+    # The image's own objects (its map is IMAGE.map) and the libraries'.
+    frames, names, edges, kinds = load_graph(args.build, pathlib.Path(args.map).stem)
     if not frames:
         print(f"FAIL: no call-graph files (*.ci) under {args.build}: build with -fcallgraph-info=su")
         return 1

@@ -7,6 +7,10 @@
 // clock; under QEMU -icount that is guest time.
 // Every buffer is static, sized by the kernel's constexpr formulas; a table
 // too big for them, or none, is refused in CAPS (no-valid-table).
+// Built with GABARIT_HIL_PARTICLE (gabarit-firmware-hil-particle), it runs
+// the particle tracker instead (firmware_particle_session.hpp: gabarit track
+// --tracker particle's defaults, 1,000 particles) on frames of up to
+// kMaxParticleFrameSide pixels a side.
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
@@ -19,7 +23,11 @@
 #include "gabarit/link/session_report.hpp"
 #include "gabarit/table_format.hpp"
 #include "gabarit/table_view.hpp"
+#if GABARIT_HIL_PARTICLE
+#include "firmware_particle_session.hpp"
+#else
 #include "firmware_session.hpp"
+#endif
 #include "tracker_capacity.hpp"
 #include "uart.hpp"
 
@@ -31,8 +39,13 @@ namespace {
 
 using namespace gabarit;
 
-// Frames up to 384 x 288 (the scene suite's size) and messages of up to 1 KiB.
+// Frames up to 384 x 288 (the scene suite's size; the particle tracker's:
+// up to 256 x 256, whose edge map it holds whole) and messages of up to 1 KiB.
+#if GABARIT_HIL_PARTICLE
+constexpr std::uint32_t kMaxFrameBytes = mcu::kMaxParticleFrameSide * mcu::kMaxParticleFrameSide;
+#else
 constexpr std::uint32_t kMaxFrameBytes = 384u * 288u;
+#endif
 constexpr std::size_t kMaxPayload = 1024;
 constexpr std::size_t kMaxStackDepths = 16;
 
@@ -44,6 +57,39 @@ std::uint8_t g_frame[link::dut_frame_memory_bytes(1, kMaxFrameBytes)];
 std::byte g_rx[link::message_bytes(kMaxPayload)];
 std::uint8_t g_tx[link::cobs_encoded_capacity(link::message_bytes(link::kMinPayload))];
 ImageView g_stack_views[kMaxStackDepths];
+
+#if GABARIT_HIL_PARTICLE
+// The particle tracker's cloud, its radix sort's indices, the frame's edge
+// map and the intensity measures; the tracker scratch above serves the
+// proposals' vote.
+Particle g_cloud[particle_scratch_particles(mcu::kMaxParticles)];
+Particle g_next[particle_scratch_particles(mcu::kMaxParticles)];
+std::uint32_t g_order[particle_scratch_order(mcu::kMaxParticles)];
+std::uint64_t g_edge_bits[mcu::kEdgeMapWords];
+RoiPoint g_edge_features[mcu::kEdgeMapFeatures];
+IntensityCorrelationMeasure g_intensity[2];
+static_assert(mcu::kFirmwareParticleProfile.particles <= mcu::kMaxParticles, "the cloud's arrays hold the profile's particles");
+
+// The particle tracker behind the stencil session's interface.
+class HilSession {
+ public:
+  HilSession(const TableView& table, std::span<ImageView> stack_views) noexcept
+      : session_(table, {{g_cloud, g_next, g_order}, g_edge_bits, g_edge_features, {}, stack_views, g_intensity}) {}
+  std::uint32_t mode() const noexcept { return session_.mode(); }
+  [[nodiscard]] bool start(const Pose& initial) noexcept { return session_.start(initial); }
+  bool started() const noexcept { return session_.started(); }
+  // `fine`: the proposals' vote (set once: the table never changes).
+  [[nodiscard]] Status step(const ImageView& image, TrackerScratch fine, SessionResult& out) noexcept {
+    session_.use_proposer_scratch(fine);
+    return session_.step(image, out);
+  }
+
+ private:
+  mcu::FirmwareParticleSession session_;
+};
+#else
+using HilSession = mcu::FirmwareSession;
+#endif
 
 // SysTick (every Cortex-M core has one) as a 64-bit clock at the core clock:
 // a 24-bit down-counter read at every message and every frame, so it never
@@ -125,7 +171,7 @@ class FirmwareDut {
  private:
   const TableView* table_;
   Timer& timer_;
-  mcu::FirmwareSession session_;
+  HilSession session_;
 };
 
 // The table in the slot, validated once: its header's size, then the

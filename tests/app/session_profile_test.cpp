@@ -6,14 +6,17 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <string>
 #include <vector>
 
+#include "firmware_particle_session.hpp"
 #include "firmware_session.hpp"
 #include "gabarit/app/error.hpp"
 #include "gabarit/app/hosted_session.hpp"
+#include "gabarit/app/particle_run.hpp"
 #include "gabarit/app/image_io.hpp"
 #include "gabarit/app/session_profile_io.hpp"
 #include "gabarit/host/tables/model.hpp"
@@ -265,6 +268,208 @@ TEST(SessionProfile, FirmwareTwinMatchesTheHostedSessionBitForBit) {
   }
   EXPECT_EQ(n, 50);
   EXPECT_GT(lost, 0) << "the occlusion should have lost the target (the recovery path is compared too)";
+  fs::remove_all(dir);
+}
+
+
+// The particle tracker is a choice of the profile: its text, the command
+// line's group, and CAPS (its measure resolved) carry it.
+TEST(SessionProfile, TheParticleTrackerTravelsInTheTextTheOptionsAndCaps) {
+  SessionProfile p;
+  p.tracker = TrackerKind::kParticle;
+  p.particle_measure = ParticleMeasureKind::kEdges;
+  EXPECT_EQ(validate(p), Status::kOk);
+  const std::string text = format_profile(p);
+  EXPECT_NE(text.find("tracker = particle\n"), std::string::npos) << text;
+  EXPECT_NE(text.find("measure = edges\n"), std::string::npos) << text;
+  EXPECT_TRUE(parse_profile(text, "t") == p);
+  EXPECT_EQ(format_profile(SessionProfile{}).find("tracker = stencil\nmeasure = auto\n"), std::string(kProfileMagic).size() + 1);
+  for (ParticleMeasureKind m : {ParticleMeasureKind::kEdges, ParticleMeasureKind::kStencil, ParticleMeasureKind::kIntensity}) {
+    p.particle_measure = m;
+    for (int effect = 0; effect < 4; ++effect) {  // the stencil session's effects do not apply
+      const std::uint32_t bits = mode_bits(p, (effect & 1) != 0, (effect & 2) != 0);
+      EXPECT_EQ(bits & ~(link::kModeParticleTracker | link::kModeParticleMeasureMask), 0u) << bits;
+      EXPECT_TRUE(profile_from_mode_bits(bits) == p) << bits;
+    }
+  }
+  p.seed = 2;  // numbers do not travel: the harness refuses a tuned device
+  EXPECT_NE(mode_bits(p, false, false) & link::kModeTuned, 0u);
+  EXPECT_EQ(profile_from_mode_bits(mode_bits(SessionProfile{}, true, true)).tracker, TrackerKind::kStencil);
+
+  SessionProfile bad = p;
+  bad.plain = true;  // the particle tracker is not the thesis's loop
+  EXPECT_EQ(validate(bad), Status::kInvalidArgument);
+  SessionProfile measured;  // a measure names the particle tracker's
+  measured.particle_measure = ParticleMeasureKind::kEdges;
+  EXPECT_EQ(validate(measured), Status::kInvalidArgument);
+  EXPECT_THROW((void)parse_profile("gabarit-session-profile 1\nmeasure = edges\n", "t"), Error);
+  EXPECT_THROW((void)parse_profile("gabarit-session-profile 1\ntracker = particle\nplain = true\n", "t"), Error);
+  EXPECT_THROW((void)parse_profile("gabarit-session-profile 1\ntracker = kalman\n", "t"), Error);
+
+  Args args("t", "", "", session_option_group());
+  ASSERT_TRUE(args.parse({"--tracker", "particle", "--measure", "stencil", "--particles", "300"}));
+  const SessionProfile read = read_session_profile(args);
+  EXPECT_EQ(read.tracker, TrackerKind::kParticle);
+  EXPECT_EQ(read.particle_measure, ParticleMeasureKind::kStencil);
+  EXPECT_EQ(read.particles, 300u);
+  const ParticleRunOptions run = particle_run_options(read);
+  EXPECT_EQ(run.measure, ParticleMeasureKind::kStencil);
+  EXPECT_FALSE(run.finer);  // the stencil measure alone reads no edge map
+  for (const std::vector<std::string>& refused : std::vector<std::vector<std::string>>{
+           {"--measure", "edges"}, {"--tracker", "particle", "--no-verify"}, {"--tracker", "particle", "--plain"},
+           {"--tracker", "particle", "--recovery", "grid"}, {"--tracker", "hough"}, {"--tracker", "particle", "--measure", "ncc"}}) {
+    Args a("t", "", "", session_option_group());
+    ASSERT_TRUE(a.parse(refused));
+    EXPECT_THROW((void)read_session_profile(a), UsageError) << refused[1];
+  }
+}
+
+// The hosted session with the profile's particle tracker runs what gabarit
+// track --tracker particle runs (run_particle_tracking), bit for bit, on a
+// scene with an occlusion; CAPS reports the measure the table resolves.
+TEST(HostedSession, RunsTheProfilesParticleTrackerAsGabaritTrackDoes) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / ("gabarit-particle-session-" + std::to_string(::getpid()));
+  host::SceneOptions so;
+  so.frames = 24;
+  so.width = 0, so.height = 0;
+  so.depths = 2;
+  so.occlusion_start = 8;
+  so.occlusion_frames = 6;
+  so.blur_every = 0;
+  host::write_scene_sequence(so, dir.string());
+  host::ImageModelOptions mo;
+  mo.canny = true;
+  const std::vector<std::byte> bytes = testing::build(
+      host::model_from_images({(dir / "model_00.pgm").string(), (dir / "model_01.pgm").string()}, mo), "-3:3:7", "-3:3:7", "-1:1:3");
+  const TableView table = testing::open_table(bytes);
+  const auto truth = app::read_pose_csv((dir / "gt.csv").string());
+  const Pose start{static_cast<float>(truth[0].x), static_cast<float>(truth[0].y), static_cast<float>(truth[0].theta_deg), 0};
+
+  for (ParticleMeasureKind measure : {ParticleMeasureKind::kAuto, ParticleMeasureKind::kEdges}) {
+    SessionProfile p;
+    p.tracker = TrackerKind::kParticle;
+    p.particle_measure = measure;
+    p.particles = 300;
+    std::vector<TrackRow> want;
+    auto frames = open_frames((dir / "frames.y4m").string());
+    run_particle_tracking(table, *frames, start, particle_run_options(p), [&](const TrackRow& row) { want.push_back(row); });
+    ASSERT_EQ(want.size(), 24u);
+
+    HostedSession hosted(table, p);
+    const std::uint32_t resolved = measure == ParticleMeasureKind::kAuto ? 3u : 1u;  // intensity with images, as asked
+    EXPECT_EQ(hosted.mode(), link::kModeParticleTracker | (resolved << link::kModeParticleMeasureShift) | link::kModeTuned);
+    EXPECT_FALSE(hosted.started());
+    EXPECT_FALSE(hosted.start(Pose{start.x, start.y, start.theta_deg, 2}));  // a depth the table does not have
+    ASSERT_TRUE(hosted.start(start));
+    frames = open_frames((dir / "frames.y4m").string());
+    GrayImage frame;
+    const auto same = [](float x, float y) { return std::memcmp(&x, &y, sizeof x) == 0; };
+    std::size_t near = 0;
+    for (std::size_t n = 0; frames->next(frame); ++n) {
+      SessionResult r;
+      ASSERT_EQ(hosted.step(frame.view(), r), Status::kOk);
+      near += std::hypot(r.pose.x - truth[n].x, r.pose.y - truth[n].y) < 3.0;
+      EXPECT_TRUE(same(r.pose.x, want[n].step.pose.x) && same(r.pose.y, want[n].step.pose.y) &&
+                  same(r.pose.theta_deg, want[n].step.pose.theta_deg) && r.pose.depth == want[n].step.pose.depth)
+          << "frame " << n;
+      EXPECT_EQ(r.state, want[n].step.state) << n;
+      EXPECT_TRUE(same(r.score, want[n].step.score)) << n;
+      EXPECT_EQ(r.confidence, want[n].confidence) << n;
+    }
+    EXPECT_GE(near, 8u) << "the runs compared should track the object (up to the occlusion at least)";
+    // The filter is built for the first frame's size.
+    const GrayImage other(frame.width + 1, frame.height);
+    SessionResult r;
+    EXPECT_EQ(hosted.step(other.view(), r), Status::kInvalidArgument);
+  }
+  SessionProfile p;
+  p.tracker = TrackerKind::kParticle;
+  p.particle_measure = ParticleMeasureKind::kIntensity;
+  app::Rng rng(3);
+  const std::vector<std::byte> edges_only = testing::build(testing::point_model(testing::random_points(rng, 40, 20, 2)), "-2:2:5", "-2:2:5");
+  EXPECT_THROW(HostedSession(testing::open_table(edges_only), p), Error);  // no model images
+  fs::remove_all(dir);
+}
+
+// The particle HIL firmware's static twin and the hosted session with the
+// profile's particle tracker, from the bits the twin reports in CAPS as the
+// harness builds its reference: every frame's result bit for bit, with the
+// intensity measure (a table with model images) and the edge measure (the
+// same model without them), through an occlusion and a restart.
+TEST(SessionProfile, FirmwareParticleTwinMatchesTheHostedSessionBitForBit) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / ("gabarit-particle-twin-" + std::to_string(::getpid()));
+  host::SceneOptions so;
+  so.frames = 16;
+  so.width = 0, so.height = 0;
+  so.depths = 2;
+  so.occlusion_start = 6;
+  so.occlusion_frames = 4;
+  so.blur_every = 0;
+  host::write_scene_sequence(so, dir.string());
+  host::ImageModelOptions mo;
+  mo.canny = true;
+  host::ModelStack model = host::model_from_images({(dir / "model_00.pgm").string(), (dir / "model_01.pgm").string()}, mo);
+  const std::vector<std::byte> with_images = testing::build(model, "-3:3:7", "-3:3:7", "-1:1:3");
+  model.images.clear(), model.image_width = model.image_height = 0;
+  const std::vector<std::byte> without_images = testing::build(model, "-3:3:7", "-3:3:7", "-1:1:3");
+  const auto truth = app::read_pose_csv((dir / "gt.csv").string());
+  const Pose start{static_cast<float>(truth[0].x), static_cast<float>(truth[0].y), static_cast<float>(truth[0].theta_deg), 0};
+
+  const std::uint32_t n = mcu::kFirmwareParticleProfile.particles;
+  std::vector<Particle> cloud(particle_scratch_particles(n)), next(particle_scratch_particles(n));
+  std::vector<std::uint32_t> order(particle_scratch_order(n));
+  std::vector<std::uint64_t> bits(edge_map_words(512, 512));
+  std::vector<RoiPoint> edge_features(edge_map_features(512));
+  std::vector<ImageView> views(16);
+  std::vector<IntensityCorrelationMeasure> measures(2);
+  for (const std::vector<std::byte>* bytes : {&with_images, &without_images}) {
+    const TableView table = testing::open_table(*bytes);
+    testing::TrackerTestScratch proposer(table);
+    mcu::FirmwareParticleSession twin(table, {{cloud, next, order}, bits, edge_features, proposer.view(), views, measures});
+    HostedSession hosted(table, profile_from_mode_bits(twin.mode()));
+    EXPECT_EQ(hosted.mode(), twin.mode());
+    const std::uint32_t measure = (twin.mode() & link::kModeParticleMeasureMask) >> link::kModeParticleMeasureShift;
+    EXPECT_EQ(measure, table.has_model_images() ? 3u : 1u);
+    SessionResult r;
+    GrayImage frame;
+    EXPECT_EQ(twin.step(GrayImage(8, 8).view(), r), Status::kInvalidArgument);  // not started
+    for (int run = 0; run < 2; ++run) {  // the second run: a restart, the filter built afresh
+      ASSERT_TRUE(twin.start(start));
+      ASSERT_TRUE(hosted.start(start));
+      auto frames = open_frames((dir / "frames.y4m").string());
+      int k = 0;
+      for (; frames->next(frame); ++k) {
+        SessionResult a, b;
+        ASSERT_EQ(twin.step(frame.view(), a), Status::kOk) << k;
+        ASSERT_EQ(hosted.step(frame.view(), b), Status::kOk) << k;
+        const auto same = [](float x, float y) { return std::memcmp(&x, &y, sizeof x) == 0; };
+        EXPECT_TRUE(same(a.pose.x, b.pose.x) && same(a.pose.y, b.pose.y) && same(a.pose.theta_deg, b.pose.theta_deg) &&
+                    a.pose.depth == b.pose.depth)
+            << "measure " << measure << ", frame " << k;
+        EXPECT_EQ(a.state, b.state) << k;
+        EXPECT_EQ(a.confidence, b.confidence) << k;
+        EXPECT_TRUE(same(a.score, b.score)) << k;
+        EXPECT_EQ(a.step.features, b.step.features) << k;
+        EXPECT_EQ(a.step.votes, b.step.votes) << k;
+        EXPECT_EQ(a.work, b.work) << k;
+      }
+      EXPECT_EQ(k, 16);
+    }
+    EXPECT_EQ(twin.step(GrayImage(frame.width, frame.height + 1).view(), r), Status::kInvalidArgument);  // another size
+    EXPECT_FALSE(twin.start(Pose{start.x, start.y, start.theta_deg, 2}));  // a depth the table does not have
+  }
+  // A cloud or a frame larger than the scratch holds.
+  const TableView table = testing::open_table(without_images);
+  testing::TrackerTestScratch proposer(table);
+  mcu::FirmwareParticleSession short_cloud(table, {{std::span(cloud).first(10), next, order}, bits, edge_features, proposer.view(), views, measures});
+  ASSERT_TRUE(short_cloud.start(start));
+  SessionResult r;
+  EXPECT_EQ(short_cloud.step(GrayImage(64, 64).view(), r), Status::kBufferTooSmall);
+  mcu::FirmwareParticleSession small_map(table, {{cloud, next, order}, std::span(bits).first(8), edge_features, proposer.view(), views, measures});
+  ASSERT_TRUE(small_map.start(start));
+  EXPECT_EQ(small_map.step(GrayImage(64, 64).view(), r), Status::kBufferTooSmall);
   fs::remove_all(dir);
 }
 

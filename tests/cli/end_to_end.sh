@@ -243,7 +243,7 @@ expect 2 "want A <= B" $g detect --table "$s/t.gbt" --theta-range 5:1 "$s/model_
 expect 2 "--min-score" $g detect --table "$s/t.gbt" --min-score 2 "$s/model_00.pgm"
 expect 2 "at least --max-count" $g detect --table "$s/t.gbt" --max-count 9 --candidates 3 "$s/model_00.pgm"
 expect 2 "apply to detection" $g track --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init" --recovery grid --min-score 0.4
-expect 2 "need --init" $g track --tracker particle --table "$s/t.gbt" --frames "$s/frames.y4m"
+expect 2 "needs --init" $g track --tracker particle --table "$s/t.gbt" --frames "$s/frames.y4m"
 expect 1 "cannot open" $g detect --table "$s/t.gbt" "$s/missing.pgm"
 $g synth --pipette-suite --scenes 1 --frames 3 -o "$work/pipettes" 2>/dev/null || fail "synth --pipette-suite"
 grep -q "^0,glass-pipette-gravel-smooth-cover-d1-s1001,tuning," "$work/pipettes/suite.csv" || fail "synth --pipette-suite: listing"
@@ -252,7 +252,7 @@ expect 2 "applies to --tracker particle and --recovery particle" $g track --tabl
 expect 2 "applies to --tracker particle" $g track --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init" --measure edges
 expect 2 "not --tracker particle" $g track --tracker particle --plain --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init"
 expect 2 "want stencil or particle" $g track --tracker kalman --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init"
-expect 2 "want intensity, edges or stencil" $g track --tracker particle --measure votes --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init"
+expect 2 "want auto, intensity, edges or stencil" $g track --tracker particle --measure votes --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init"
 expect 2 "is none of" $g track --tracker particle --without speed --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init"
 expect 2 "--particles" $g track --tracker particle --particles 0 --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init"
 expect 1 "the focus stack has 1 images; the table has 2 depths" $g track --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init" \
@@ -280,6 +280,20 @@ printf 'gabarit-session-profile 1\nrecovery = sideways\n' > "$s/bad.profile"
 expect 1 "bad.profile:2: recovery 'sideways'" $g track --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init" --profile "$s/bad.profile"
 expect 2 "is also an input" $g track --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init" --profile "$s/run.profile" \
   --save-profile "$s/run.profile"
+# The particle tracker is a choice of the profile: saved, read back to the
+# same poses, and run by the HIL's in-process device against its reference.
+$g track --tracker particle --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init" --save-profile "$s/pf.profile" \
+  -o "$s/pf1.csv" 2>/dev/null || fail "track --tracker particle --save-profile"
+grep -qx "tracker = particle" "$s/pf.profile" || fail "--save-profile: no particle tracker: $(cat "$s/pf.profile")"
+cmp -s "$s/pa.csv" "$s/pf1.csv" || fail "--save-profile changed the particle tracker's poses"
+$g track --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init" --profile "$s/pf.profile" -o "$s/pf2.csv" 2>/dev/null \
+  || fail "track --profile (particle tracker)"
+cmp -s "$s/pa.csv" "$s/pf2.csv" || fail "--profile of a saved particle profile does not give --tracker particle's poses"
+$g hil run --dut inprocess --profile "$s/pf.profile" --sequence "$s" --table "$s/t.gbt" --frames 12 --report "$s/pf-hil" 2>/dev/null \
+  || fail "hil run --profile (particle tracker)"
+grep -q '"poses_matching_reference": 12' "$s/pf-hil/summary.json" || fail "hil run, particle tracker: $(head -c 400 "$s/pf-hil/summary.json")"
+expect 2 "applies to the stencil tracker" $g track --tracker particle --no-verify --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init"
+expect 2 "--measure applies to --tracker particle" $g track --measure edges --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init"
 expect 2 "applies to --scene" $g synth --shape curve --depths 3 -o "$work/x"
 expect 2 "one of --shape, --scene, --suite and --pipette-suite" $g synth -o "$work/x"
 expect 2 "--light '1.5': want SWING" $g synth --scene cog --light 1.5 -o "$work/x"

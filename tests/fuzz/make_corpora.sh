@@ -42,6 +42,7 @@ printf 'name: b\nrelay: x\ngpio:\n  lock: 99999\n' > "$out/board_map/bad-line.ya
 printf 'gabarit-session-profile 1\n# tuned\nplain = true\nrecover = true\nsearch-budget = 40\n' > "$out/session_profile/short.profile"
 printf 'gabarit-session-profile 1\nplain = true\nrecovery = particle\n' > "$out/session_profile/needs-recovery.profile"
 printf 'gabarit-session-profile 1\nwithout = modes,all\nseed = 18446744073709551615\n' > "$out/session_profile/bad-seed.profile"
+printf 'gabarit-session-profile 1\ntracker = particle\nmeasure = edges\nparticles = 300\n' > "$out/session_profile/particle.profile"
 # Test vectors: a small set from `gabarit vectors` (one frame, two session
 # frames, ten particles), and a truncated one.
 "$g" vectors --out "$work/vec" --points 100 --depths 1 --frames 1 --session-frames 2 --hidden 1,1 --particles 10 \

@@ -243,6 +243,36 @@ TEST(HilRun, TheInProcessDutMatchesTheReferenceOnEveryFrame) {
   }
 }
 
+// The profile's particle tracker on the device: CAPS says so (with the
+// measure the table resolves), the reference runs it too, every frame is
+// bit-identical, through a restart and a dropped frame.
+TEST(HilRun, TheInProcessDutRunsTheProfilesParticleTracker) {
+  InprocessOptions o;
+  o.table_path = sequence().table;
+  o.profile.tracker = app::TrackerKind::kParticle;
+  auto dut = make_inprocess_dut(o);
+  RunConfig c = config_for(sequence());
+  c.max_frames = 40;
+  c.faults = read_fault_file(write_temp("particle", "10 drop\n25 restart\n"), c.max_frames);
+  const RunResult r = run_hil(c, *dut);
+  EXPECT_EQ(r.error, "");
+  EXPECT_NE(r.caps.mode & link::kModeParticleTracker, 0u);
+  EXPECT_NE(r.caps.mode & link::kModeParticleMeasureMask, 0u);  // resolved: never auto
+  EXPECT_EQ(r.unaccounted, 0u);
+  std::size_t posed = 0;
+  for (const FrameRecord& f : r.frames) {
+    // Only the faults' frames go without a pose: the dropped one and those in flight at the restart.
+    if (f.fate != Fate::kPose) {
+      EXPECT_TRUE(f.fate == Fate::kDroppedByLink || f.fate == Fate::kLostInRestart) << f.frame << ": " << fate_name(f.fate);
+      continue;
+    }
+    ++posed;
+    ASSERT_EQ(f.reference, 1) << "frame " << f.frame << ": " << f.mismatch;
+  }
+  EXPECT_GE(posed, 40u - 1u - o.frame_slots);
+  for (const Check& check : run_checks(r)) EXPECT_TRUE(check.passed) << check.name << ": " << check.message;
+}
+
 TEST(HilRun, EveryFaultKindIsDetectedAndRecoveredFrom) {
   const std::string plan = write_temp("every", "10 drop\n20 duplicate\n30 reorder\n40 corrupt\n50 bitflip\n60 restart\n70 drop\n71 corrupt\n");
   for (std::uint32_t slots : {1u, 4u}) {

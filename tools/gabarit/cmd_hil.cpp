@@ -64,7 +64,7 @@ app::Args declare_hil_run() {
       "bit for bit against the host's own tracking of the same frames with the same table, injects faults on the\n"
       "host side of the link, and writes a report: frames.csv, poses.csv, results.jsonl, summary.json, junit.xml,\n"
       "faults.csv (the plan, to replay), report.md with SVG plots. Exit status 0 when every check passes, 1 otherwise.\n"
-      "DUTs: inprocess (the kernel's TrackingSession on a thread, loopback or UDP link), verilator (the hardware\n"
+      "DUTs: inprocess (the session profile's tracker on a thread, loopback or UDP link), verilator (the hardware\n"
       "voter, Verilated, in gabarit-hil-verilator: the thesis's loop with the voter in RTL), cortex-m (the HIL\n"
       "firmware in qemu-system-arm, the table loaded into its flash slot, its UART0 on a socket), virtual-board (the\n"
       "board application on Debian's arm64 kernel in qemu-system-aarch64: frames through vivid and V4L2, poses over a\n"

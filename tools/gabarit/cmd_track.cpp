@@ -39,13 +39,6 @@ app::Args declare_track() {
       {"--focus-stack", "A.pgm,B.pgm,...", "model images, one per depth, instead of those the table carries: each\n"
                                            "                          frame's depth (and the reported angle) by intensity (normalised\n"
                                            "                          cross-correlation) at the tracked pose"},
-      {"--tracker", "stencil|particle", "stencil (default): the stencil session; particle: the thesis's\n"
-                                        "                          particle filter (chapter 3, docs/particle-filter.md) with the table's model"},
-      {"--measure", "intensity|edges|stencil", "--tracker particle: the session's verified score (the model image's\n"
-                                               "                          correlation with the frame on at most 256 of its samples; the default\n"
-                                               "                          for a table with model images), edge correlation over the table's\n"
-                                               "                          model points (the default without), or the stencil vote of each\n"
-                                               "                          particle's cell"},
       {"-o", "POSES.csv", "pose output (default stdout)"},
       {"--stats", "STATS.json", "per-frame timing and vote statistics"}};
   for (app::Option& o : app::session_option_group()) options.push_back(std::move(o));
@@ -62,20 +55,17 @@ app::Args declare_track() {
                    std::move(options));
 }
 
-// The options that only the stencil session takes.
+// What gabarit track adds to the profile that only the stencil session takes.
 void refuse_for_particle_tracker(const app::Args& args) {
-  for (const char* option : {"--plain", "--motion-filter", "--refine", "--recover", "--recovery", "--subcell", "--coarse",
-                             "--search-budget", "--screen-stride", "--search-interval", "--threads", "--focus-stack",
-                             "--no-focus-stack", "--profile", "--detect-after", "--recovery-frames", "--survey-frames",
-                             "--verify-refine"})
+  for (const char* option : {"--coarse", "--threads", "--focus-stack"})
     if (args.has(option)) throw app::UsageError(std::string(option) + " applies to the stencil tracker, not --tracker particle");
 }
 
 // The stencil session's run: the profile from the shared option group, and
 // what only gabarit track adds (threads, a coarse table, focus-stack images,
 // detection without --init).
-host::TrackingOptions read_tracking(const app::Args& args, const TableView& table, std::optional<app::TableFile>& coarse_file,
-                                    std::vector<std::string>& inputs) {
+host::TrackingOptions read_tracking(const app::Args& args, const app::SessionProfile& profile, const TableView& table,
+                                    std::optional<app::TableFile>& coarse_file, std::vector<std::string>& inputs) {
   host::TrackingOptions options;
   options.extras.voter = app::parse_voter(args.get_or("--voter", "auto"), "--voter");
   if (args.has("--binary")) options.extras.detector = Detector{table_format::DetectorKind::kBinary, 0};
@@ -86,7 +76,7 @@ host::TrackingOptions read_tracking(const app::Args& args, const TableView& tabl
                           "--subcell, --profile or --focus-stack");
   if (options.threads > 1 && args.has("--voter")) throw app::UsageError("--threads votes with its own (multi-threaded CSR) voter; drop --voter");
   if (args.has("--focus-stack") && args.has("--no-focus-stack")) throw app::UsageError("give one of --focus-stack and --no-focus-stack");
-  options.profile = app::read_session_profile(args);
+  options.profile = profile;
   if (options.threads > 1) options.profile.plain = true;
   if (options.threads > 1 && options.profile.recovery == app::RecoveryKind::kAuto) options.profile.recovery = app::RecoveryKind::kGrid;
   if (args.has("--coarse") && options.profile.recovery == app::RecoveryKind::kAuto) options.profile.recovery = app::RecoveryKind::kGrid;
@@ -108,7 +98,7 @@ host::TrackingOptions read_tracking(const app::Args& args, const TableView& tabl
       options.profile.recovery != app::RecoveryKind::kAuto &&
       !options.detect_first)
     throw app::UsageError("--theta-range and --min-score apply to detection: without --init, or with --recovery detect");
-  if (options.detect_first && options.threads > 1) throw app::UsageError("--tracker particle and --threads need --init");
+  if (options.detect_first && options.threads > 1) throw app::UsageError("--threads needs --init");
   options.extras.finder = host::finder_options_from(args, table);
   options.extras.finder.max_count = 1;
   options.extras.finder.candidates = FinderOptions{}.candidates;
@@ -126,23 +116,13 @@ host::TrackingOptions read_tracking(const app::Args& args, const TableView& tabl
   return options;
 }
 
-// The particle tracker's run: the profile's particle numbers, and its measure.
-app::ParticleRunOptions read_particle_tracker(const app::Args& args) {
+// The particle tracker's run: the profile's particle numbers and measure.
+app::ParticleRunOptions read_particle_tracker(const app::Args& args, const app::SessionProfile& profile) {
   refuse_for_particle_tracker(args);
-  if (!args.has("--init")) throw app::UsageError("--tracker particle and --threads need --init");
-  app::ParticleRunOptions po = app::particle_run_options(app::read_session_profile(args));
+  if (!args.has("--init")) throw app::UsageError("--tracker particle needs --init");
+  app::ParticleRunOptions po = app::particle_run_options(profile);
   if (args.has("--binary")) po.detector = Detector{table_format::DetectorKind::kBinary, 0};
   po.voter = app::parse_voter(args.get_or("--voter", "auto"), "--voter");
-  if (const std::string m = args.get_or("--measure", "auto"); m == "stencil") {
-    po.measure = app::ParticleMeasureKind::kStencil;
-    po.finer = false;  // one vote per frame and no edge map: modes ranked by weight, confidence from the vote
-  } else if (m == "intensity") {
-    po.measure = app::ParticleMeasureKind::kIntensity;  // its finer measure: the same correlation on every sample
-  } else if (m == "edges") {
-    po.measure = app::ParticleMeasureKind::kEdges;
-  } else if (m != "auto") {
-    throw app::UsageError("--measure '" + m + "': want intensity, edges or stencil");
-  }
   return po;
 }
 
@@ -231,10 +211,9 @@ int track(const std::vector<std::string>& argv) {
   const app::TableFile table_file(args.get("--table"));
   const TableView& table = table_file.view();
   const Pose pose = args.has("--init") ? app::parse_init_pose(args.get("--init"), table, "--init") : Pose{};
-  const std::string tracker = args.get_or("--tracker", "stencil");
-  if (tracker != "stencil" && tracker != "particle") throw app::UsageError("--tracker '" + tracker + "': want stencil or particle");
-  const bool particle = tracker == "particle";
-  if (!particle && args.has("--measure")) throw app::UsageError("--measure applies to --tracker particle");
+  // The profile (--profile and the options over it) chooses the tracker.
+  const app::SessionProfile profile = app::read_session_profile(args);
+  const bool particle = profile.tracker == app::TrackerKind::kParticle;
 
   std::vector<std::string> inputs = {args.get("--table"), args.get("--frames")};
   if (args.has("--profile")) inputs.push_back(args.get("--profile"));
@@ -242,9 +221,9 @@ int track(const std::vector<std::string>& argv) {
   std::optional<host::TrackingOptions> options;
   std::optional<app::ParticleRunOptions> particle_options;
   if (particle) {
-    particle_options = read_particle_tracker(args);
+    particle_options = read_particle_tracker(args, profile);
   } else {
-    options = read_tracking(args, table, coarse_file, inputs);
+    options = read_tracking(args, profile, table, coarse_file, inputs);
   }
   // Outputs never name an input, and replace their file only when the run
   // is complete: any error leaves a previous output as it was.
@@ -253,10 +232,9 @@ int track(const std::vector<std::string>& argv) {
   }
   if (args.has("-o") && args.has("--stats")) app::refuse_same_file(args.get("--stats"), "--stats", {args.get("-o")});
   if (args.has("--save-profile")) {
-    if (particle) throw app::UsageError("--save-profile applies to the stencil session");
     for (const char* other : {"-o", "--stats"})
       if (args.has(other)) app::refuse_same_file(args.get("--save-profile"), "--save-profile", {args.get(other)});
-    app::write_file(args.get("--save-profile"), app::format_profile(options->profile));
+    app::write_file(args.get("--save-profile"), app::format_profile(particle ? profile : options->profile));
   }
 
   auto frames = app::open_frames(args.get("--frames"));

@@ -1,7 +1,9 @@
 // The one place a hosted program builds a tracking session: from a table and
 // a session profile (session_profile.hpp), with its scratch, focus stack,
 // and recovery stages (the grid, detection over the whole frame, a particle
-// filter) allocated here. gabarit track, the board application, the HIL's
+// filter) allocated here; or, with the profile's particle tracker, the
+// particle filter (particle_run.hpp) in the session's place, its results as
+// SessionResults. gabarit track, the board application, the HIL's
 // in-process device and the harness's reference all run this class; the
 // Cortex-M firmware runs its static twin (platform/cortex-m/hil_dut.cpp),
 // checked against it by tests/app/session_profile_test.cpp and the HIL.
@@ -54,8 +56,12 @@ class HostedSession {
   // detection) and starts there if found; false if nothing was found.
   // Throws app::Error on a kernel error.
   bool start_by_detection(const ImageView& frame);
-  bool started() const { return session_.has_value(); }
-  // Tracks one frame of a started session.
+  bool started() const { return session_.has_value() || particle_started_; }
+  // Tracks one frame of a started session. The particle tracker is built at
+  // its first frame, for that frame's size: a later frame of another size
+  // is kInvalidArgument. Throws app::Error when a recovery stage or the
+  // particle tracker cannot be built for the frame (as the constructors of
+  // ParticleTracker and the finder's buffers do).
   [[nodiscard]] Status step(const ImageView& frame, SessionResult& out);
 
   const SessionProfile& profile() const { return profile_; }
@@ -65,6 +71,7 @@ class HostedSession {
 
  private:
   void fit_frame(std::uint32_t width, std::uint32_t height);
+  Status particle_step(const ImageView& frame, SessionResult& out);
 
   const TableView& table_;
   SessionProfile profile_;
@@ -81,6 +88,8 @@ class HostedSession {
   std::optional<DetectionRecovery> detection_;
   std::unique_ptr<ParticleTracker> particles_;
   std::optional<ParticleRecovery> particle_recovery_;
+  bool particle_started_ = false;  // the particle tracker: started, built at the first frame
+  std::uint32_t particle_width_ = 0, particle_height_ = 0;
   Pose start_pose_;
   std::optional<TrackingSession> session_;
 };

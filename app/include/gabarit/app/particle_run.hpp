@@ -21,20 +21,7 @@
 
 namespace gabarit::app {
 
-enum class ParticleMeasureKind : std::uint8_t {
-  // The default: kIntensity for a table with model images, else kEdges (on
-  // the pipette scenes the intensity measure held the tip within 6 px on
-  // 57.9% of the held-out frames against 36.5%, in two thirds of the time;
-  // docs/particle-filter.md, "The measures").
-  kAuto,
-  kEdges,    // edge correlation (thesis 3.4.3): every edge_stride-th model point, within edge_tolerance px of an edge
-  kStencil,  // the stencil vote of the particle's cell (the table voted once per frame at the prediction)
-  // The session's verified score: the correlation of the table's model image
-  // of the particle's depth with the frame, on about intensity_samples of
-  // its samples; the finer measure the same on every sample of the stack's
-  // step. Needs a table with model images.
-  kIntensity,
-};
+// ParticleMeasureKind is the profile's (session_profile.hpp).
 const char* name_of(ParticleMeasureKind kind) noexcept;
 // The measure a table runs: kAuto resolved, the others as they are.
 ParticleMeasureKind resolved_measure(ParticleMeasureKind kind, const TableView& table) noexcept;
@@ -56,11 +43,12 @@ struct ParticleRunOptions {
   // Vote-guided proposals (filter.proposal_fraction of the cloud, with the
   // intensity and edge measures): the stencil vote's best cells drawn
   // around each frame, 0..kMaxParticleProposals (0: none).
-  std::uint32_t proposals = 4;
+  std::uint32_t proposals = kDefaultParticleProposals;
 };
 
 // The profile's particle numbers (particles, seed, the edge measure's stride
-// and tolerance, the improvements switched off) over the defaults above.
+// and tolerance, the improvements switched off) and its measure (the stencil
+// measure without the finer one) over the defaults above.
 ParticleRunOptions particle_run_options(const SessionProfile& profile);
 
 // A particle filter with its buffers, for frames of at most max_width x max_height.
@@ -72,7 +60,8 @@ class ParticleTracker {
   ~ParticleTracker();
   // Throws app::Error with the kernel's status name on failure.
   void start(const Pose& initial);
-  ParticleEstimate step(const app::GrayImage& frame);
+  ParticleEstimate step(const app::GrayImage& frame) { return step(frame.view()); }
+  ParticleEstimate step(const ImageView& frame);
   ParticleFilterCore& core();
   // The filter with the edge measure (particle_recovery.hpp runs it).
   // Throws app::Error with the stencil measure.

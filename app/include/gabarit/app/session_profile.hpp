@@ -30,6 +30,26 @@ enum class RecoveryKind : std::uint8_t {
 };
 // How refinement places the pose within the cell (SessionOptions::align_features).
 enum class SubCellKind : std::uint8_t { kParabola = 0, kAlignment = 1 };
+// Which of the thesis's two trackers runs.
+enum class TrackerKind : std::uint8_t {
+  kStencil = 0,   // the stencil session (tracking_session.hpp), or with `plain` the thesis's loop
+  kParticle = 1,  // the particle filter (chapter 3; particle_filter.hpp) on the table's model
+};
+// The particle tracker's measure (app/particle_run.hpp runs it).
+enum class ParticleMeasureKind : std::uint8_t {
+  // The default: kIntensity for a table with model images, else kEdges (on
+  // the pipette scenes the intensity measure held the tip within 6 px on
+  // 57.9% of the held-out frames against 36.5%, in two thirds of the time;
+  // docs/particle-filter.md, "The measures").
+  kAuto = 0,
+  kEdges = 1,    // edge correlation (thesis 3.4.3): every edge_stride-th model point, within edge_tolerance px of an edge
+  kStencil = 2,  // the stencil vote of the particle's cell (the table voted once per frame at the prediction)
+  // The session's verified score: the correlation of the table's model image
+  // of the particle's depth with the frame, on about intensity_samples of
+  // its samples; the finer measure the same on every sample of the stack's
+  // step. Needs a table with model images.
+  kIntensity = 3,
+};
 
 // The particle filter's improvements a profile may switch off (bits of
 // SessionProfile::particle_improvements_off); kAllImprovements: plain
@@ -47,7 +67,26 @@ inline constexpr std::uint32_t kKnownImprovements = (1u << 9) - 1;
 // The filter's options with the improvements in `off` switched off.
 ParticleFilterOptions particle_filter_options(std::uint32_t off) noexcept;
 
+// The stencil vote's best cells drawn around each frame by the particle
+// tracker (ParticleRunOptions::proposals' default; the firmware's too).
+inline constexpr std::uint32_t kDefaultParticleProposals = 4;
+// The measure a table runs: kAuto resolved (the intensity measure on a table
+// with model images, else the edge measure), the others as they are.
+inline constexpr ParticleMeasureKind resolved_measure(ParticleMeasureKind kind, bool has_model_images) noexcept {
+  if (kind != ParticleMeasureKind::kAuto) return kind;
+  return has_model_images ? ParticleMeasureKind::kIntensity : ParticleMeasureKind::kEdges;
+}
+// What the particle tracker reports for a frame, as a session's result (the
+// pose CSV, the HIL's POSE): its estimate, confidence from its state, and
+// its ledger (the proposals' vote as the frame's features and votes).
+SessionResult particle_session_result(const ParticleEstimate& estimate, const FrameLedger& ledger) noexcept;
+
 struct SessionProfile {
+  // The particle tracker instead of the stencil session: then only the
+  // particle filter's numbers below and particle_measure apply, and `plain`
+  // must be false.
+  TrackerKind tracker = TrackerKind::kStencil;
+  ParticleMeasureKind particle_measure = ParticleMeasureKind::kAuto;
   // The base: the tracking session's defaults (SessionOptions{}), or with
   // `plain` the thesis's loop (kPlainSession) with only the parts below added.
   bool plain = false;
@@ -80,7 +119,8 @@ struct SessionProfile {
   // survey_frames); 0: the whole search in one frame.
   std::uint32_t recovery_frames = 0;
   std::uint32_t survey_frames = 2;
-  // Particle recovery: the filter's size, seed, edge measure and improvements.
+  // Particle recovery and the particle tracker: the filter's size, seed, edge
+  // measure and improvements.
   std::uint32_t particles = 1000;
   std::uint64_t seed = 1;
   std::uint32_t edge_stride = 2;
@@ -104,7 +144,8 @@ inline constexpr SessionProfile plain_profile() noexcept {
 // survey_frames <= 1000, particles 1..10^6,
 // edge_stride 1..64, edge_tolerance 0..3, known improvement bits), a
 // recovery kind other than the grid without recovery, an alignment subcell
-// without refinement.
+// without refinement, the particle tracker with `plain`, or a particle
+// measure other than auto for the stencil session.
 [[nodiscard]] Status validate(const SessionProfile& profile) noexcept;
 
 // The kernel's options for the profile (its recovery numbers included).
@@ -127,7 +168,9 @@ SessionProfile resolve_recovery(const SessionProfile& profile, bool verifying_ta
 // it uses the table's focus stack), and the harness's reference runs
 // profile_from_mode_bits of it. The numbers (budget, interval, stride,
 // detect_after, the detection budgets, the particle filter's) do not travel: a profile whose numbers
-// differ from the defaults sets kModeTuned, and the harness refuses it.
+// differ from the defaults sets kModeTuned, and the harness refuses it. The
+// particle tracker travels as kModeParticleTracker with its measure, which
+// the device reports resolved for its table (never auto).
 std::uint32_t mode_bits(const SessionProfile& profile, bool shares_search, bool has_stack) noexcept;
 SessionProfile profile_from_mode_bits(std::uint32_t bits) noexcept;
 

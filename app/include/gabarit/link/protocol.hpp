@@ -143,6 +143,13 @@ inline constexpr std::uint32_t kModeRecoveryDetection = 1u << 6;   // re-acquisi
 inline constexpr std::uint32_t kModeRecoveryParticles = 1u << 7;   // re-acquisition by a particle filter
 inline constexpr std::uint32_t kModeSubCellAlignment = 1u << 8;    // sub-cell by feature alignment, not the parabola
 inline constexpr std::uint32_t kModeNoVerify = 1u << 9;            // the session without vote-then-verify
+// Protocol 1.3: the particle tracker (chapter 3) instead of the session; the
+// other bits are then 0 but these and kModeTuned. Its measure, resolved for
+// the device's table, in the two bits at kModeParticleMeasureShift
+// (app::ParticleMeasureKind: 1 edges, 2 stencil, 3 intensity).
+inline constexpr std::uint32_t kModeParticleTracker = 1u << 10;
+inline constexpr std::uint32_t kModeParticleMeasureShift = 11;
+inline constexpr std::uint32_t kModeParticleMeasureMask = 3u << kModeParticleMeasureShift;
 inline constexpr std::uint32_t kModeTuned = 1u << 31;              // numbers other than the defaults: not mirrored
 
 struct Hello {

@@ -46,7 +46,8 @@ struct InprocessOptions {
   std::uint16_t max_payload = 16384;
   bool udp = false;             // two UDP sockets on 127.0.0.1 instead of the loopback
 };
-// The kernel's TrackingSession on a thread of this process behind a loopback
+// The session a profile describes (app::HostedSession: the stencil session
+// or the particle tracker) on a thread of this process behind a loopback
 // link: the protocol is exercised end to end, nothing else is between.
 std::unique_ptr<DutDriver> make_inprocess_dut(const InprocessOptions& options);
 
