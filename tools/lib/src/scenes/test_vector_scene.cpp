@@ -26,6 +26,12 @@
 namespace gabarit::host {
 namespace {
 
+// The files' common trailer: a CRC-32 of every byte before it.
+void seal(std::vector<std::byte>& file) {
+  const std::size_t body = file.size() - vectors::kTrailerBytes;
+  store_le<std::uint32_t>(file.data() + body, crc32(std::span<const std::byte>(file.data(), body)));
+}
+
 // Three nested closed curves (about half, a third and a sixth of the points)
 // around the reference point: a compact ~1000-point object, radius ~45 px.
 std::vector<Point> nested_curves(std::uint32_t points, std::uint64_t seed) {
@@ -117,8 +123,7 @@ std::vector<std::byte> step_vectors(const VectorSceneOptions& o, const ModelStac
     pose = step.pose;
   }
   vectors::encode_header(set, std::span<std::byte, vectors::kHeaderBytes>(file.data(), vectors::kHeaderBytes));
-  const std::size_t body = file.size() - vectors::kTrailerBytes;
-  store_le<std::uint32_t>(file.data() + body, crc32(std::span<const std::byte>(file.data(), body)));
+  seal(file);
 
   return file;
 }
@@ -200,8 +205,7 @@ std::vector<std::byte> session_vectors(const VectorSceneOptions& o, const ModelS
       summary.session_reacquired = summary.session_reacquired || result.reacquired;
     }
     vectors::encode_session_header(session, std::span<std::byte, vectors::kSessionHeaderBytes>(out.data(), vectors::kSessionHeaderBytes));
-    const std::size_t body = out.size() - vectors::kTrailerBytes;
-    store_le<std::uint32_t>(out.data() + body, crc32(std::span<const std::byte>(out.data(), body)));
+    seal(out);
     return out;
   };
   screened_file = record(true);
@@ -256,8 +260,7 @@ std::vector<std::byte> particle_vectors(const VectorSceneOptions& o, const Table
     frames_tracking += e.state == TrackState::kTracking;
   }
   vectors::encode_particle_header(set, std::span<std::byte, vectors::kParticleHeaderBytes>(file.data(), vectors::kParticleHeaderBytes));
-  const std::size_t body = file.size() - vectors::kTrailerBytes;
-  store_le<std::uint32_t>(file.data() + body, crc32(std::span<const std::byte>(file.data(), body)));
+  seal(file);
   return file;
 }
 
