@@ -40,6 +40,7 @@ std::uint8_t g_roi_mask[kMaskBytes];
 std::uint16_t g_magnitudes[gabarit::mcu::kMagnitudeEntries];
 // The session vectors' focus stack: views of images in flash.
 gabarit::ImageView g_stack_views[gabarit::vectors::kMaxStackDepths];
+#if GABARIT_REPLAY_PARTICLES  // only the images that replay the particle vectors hold their buffers
 // The particle tracker's cloud, its radix sort's indices and the frame's edge map.
 gabarit::Particle g_cloud[gabarit::particle_scratch_particles(gabarit::mcu::kMaxParticles)];
 gabarit::Particle g_next[gabarit::particle_scratch_particles(gabarit::mcu::kMaxParticles)];
@@ -49,6 +50,7 @@ gabarit::RoiPoint g_edge_features[gabarit::mcu::kEdgeMapFeatures];
 // With the intensity measure: the coarse and the finer measure, reset once the
 // table is known (constant-initialised: no static constructor).
 gabarit::IntensityCorrelationMeasure g_intensity[2];
+#endif
 
 std::span<const std::byte> between(const std::byte* begin, const std::byte* end) {
   return {begin, static_cast<std::size_t>(end - begin)};
@@ -67,6 +69,7 @@ int mismatch(const char* what, const gabarit::vectors::Report& report) {
   return 1;
 }
 
+#if GABARIT_REPLAY_PARTICLES
 // The particle vectors: the table's tracker scratch serves the proposals' vote.
 int replay_particles(const gabarit::TableView& table, gabarit::TrackerScratch scratch) {
   gabarit::vectors::ParticleVectorSet set;
@@ -96,6 +99,7 @@ int replay_particles(const gabarit::TableView& table, gabarit::TrackerScratch sc
                     .text(": estimates bit-identical to the host"));
   return 0;
 }
+#endif
 
 }  // namespace
 
@@ -157,6 +161,8 @@ extern "C" int app_main() {
                       .dec(std::uint64_t{set.stack_depths})
                       .text(" focus-stack images: poses, confidence and votes bit-identical to the host"));
   }
+#if GABARIT_REPLAY_PARTICLES
   if (!between(gabarit_particle, gabarit_particle_end).empty()) return replay_particles(table, scratch);
+#endif
   return 0;
 }
