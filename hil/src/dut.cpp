@@ -372,10 +372,11 @@ class VirtualBoardDut final : public DutDriver {
   void start() override {
     stop();
     if (!built_) {
-      const std::vector<std::string> build = {"bash", options_.scripts + "/hil-initramfs.sh", "--cache", options_.cache,
-                                              "--board", options_.board, "--relay", options_.relay,
-                                              "--table", options_.table_path, "--window", options_.window,
-                                              "--serial", options_.serial, "--out", initramfs_};
+      std::vector<std::string> build = {"bash", options_.scripts + "/hil-initramfs.sh", "--cache", options_.cache,
+                                        "--board", options_.board, "--relay", options_.relay,
+                                        "--table", options_.table_path, "--window", options_.window,
+                                        "--serial", options_.serial, "--out", initramfs_};
+      if (!options_.profile_path.empty()) build.insert(build.end(), {"--profile", options_.profile_path});
       const pid_t p = spawn(build, -1, options_.log_path);
       int status = 0;
       ::waitpid(p, &status, 0);

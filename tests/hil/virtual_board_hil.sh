@@ -37,6 +37,20 @@ if [ "$loops" = 1 ]; then
   cmp -s "$work/clean/track.csv" "$work/clean-report/poses.csv" ||
     { echo "virtual board HIL: FAIL: the board's poses differ from gabarit track's"; diff "$work/clean/track.csv" "$work/clean-report/poses.csv" | head -5; exit 1; }
   echo "virtual board HIL: 200 poses over USB byte-identical to gabarit track's"
+  # The particle tracker from a session profile (gabarit-board --profile): CAPS
+  # says so, and 40 poses are byte for byte `gabarit track --tracker particle`'s.
+  printf 'gabarit-session-profile 1\ntracker = particle\n' > "$work/particle.profile"
+  "$g" hil run --dut virtual-board --virtual-board "$build" --profile "$work/particle.profile" --sequence "$work/clean" \
+    --frames 40 --report "$work/particle-report" 2> /dev/null ||
+    { echo "virtual board HIL: FAIL: the particle tracker's run failed"; exit 1; }
+  "$g" track --tracker particle --table "$work/clean/table.gbt" --frames "$work/clean/frames.y4m" \
+    --init "$(sed -n 2p "$work/clean/gt.csv" | cut -d, -f2,3)" -o "$work/clean/particle.csv" 2> /dev/null
+  grep -q '"mode": [0-9]*' "$work/particle-report/summary.json" &&
+    [ $(( $(grep -o '"mode": [0-9]*' "$work/particle-report/summary.json" | head -1 | grep -o '[0-9]*$') & 1024 )) != 0 ] ||
+    { echo "virtual board HIL: FAIL: the board does not report the particle tracker in CAPS"; exit 1; }
+  cmp -s <(head -41 "$work/clean/particle.csv") "$work/particle-report/poses.csv" ||
+    { echo "virtual board HIL: FAIL: the board's particle poses differ from gabarit track's"; exit 1; }
+  echo "virtual board HIL: 40 particle-tracker poses over USB byte-identical to gabarit track --tracker particle's"
 fi
 kinds=drop,duplicate,reorder,corrupt,bitflip,camera-error,camera-drop,sequence-wrap,camera-disconnect,module-reload
 kinds=$kinds,usb-stall,usb-unplug,usb-timeout,board-kill,usb-corrupt

@@ -86,7 +86,8 @@ app::Args declare_hil_run() {
                        "                          host's and the DUT's resident memory and the latency every --soak-window frames"},
        {"--soak-window", "F", "with --soak: frames per sample (default 1000)"},
        {"--plain", "", "inprocess: the thesis's loop instead of the session defaults"},
-       {"--profile", "FILE", "inprocess: the session profile the device runs (docs/file-formats.md)"},
+       {"--profile", "FILE", "inprocess, virtual-board: the session profile the device runs (docs/file-formats.md; e.g.\n"
+                             "                          tracker = particle)"},
        {"--link", "loopback|udp", "inprocess: the link (default loopback; udp: two sockets on 127.0.0.1)"},
        {"--slots", "N", "inprocess: frames the DUT queues, 1..8 (default 4)"},
        {"--firmware", "ELF", "cortex-m: the HIL firmware (build/cortex-m7/platform/cortex-m/gabarit-firmware-hil.elf)"},
@@ -145,6 +146,10 @@ std::unique_ptr<hil::DutDriver> make_dut(const app::Args& args, const std::strin
     if (shape.width > 720 || shape.height > 480)
       throw app::UsageError(frames_path + ": " + o.window + " frames; the virtual board's camera (vivid, S-Video) is 720x480");
     o.log_path = (std::filesystem::path(report) / "dut.log").string();
+    if (args.has("--profile")) {
+      (void)app::read_profile(args.get("--profile"));  // refused here, not after the board has booted
+      o.profile_path = args.get("--profile");
+    }
     dut = hil::make_virtual_board_dut(o);
   } else if (kind.rfind("board:", 0) == 0) {
     dut = hil::make_board_dut(hil::load_board_map(kind.substr(6), GABARIT_BOARDS_DIR));
@@ -205,7 +210,8 @@ int hil(const std::vector<std::string>& argv) {
     if (args.has(option) && kind != dut) throw app::UsageError(std::string(option) + " applies to --dut " + dut);
   };
   dut_only("--plain", "inprocess");
-  dut_only("--profile", "inprocess");
+  if (args.has("--profile") && kind != "inprocess" && kind != "virtual-board")
+    throw app::UsageError("--profile applies to --dut inprocess and virtual-board");
   dut_only("--link", "inprocess");
   dut_only("--slots", "inprocess");
   dut_only("--firmware", "cortex-m");

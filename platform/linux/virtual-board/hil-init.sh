@@ -11,7 +11,7 @@ mount -t proc proc /proc
 mount -t sysfs sys /sys
 mount -t devtmpfs dev /dev
 mkdir -p /tmp && mount -t tmpfs tmp /tmp
-. /data/params.sh  # WINDOW, SERIAL
+. /data/params.sh  # WINDOW, SERIAL, and PROFILE when the harness gave one
 fail() {
   echo "virtual-board: FAILED: $1"
   echo "VIRTUAL-BOARD: HIL DONE 1"
@@ -42,7 +42,7 @@ gabarit-hil-relay --gpio-dir "$sim" --usb "0x1d6b:0x0104:$SERIAL" --board-log /t
   /bin/gabarit-board --device /tmp/camera --format GREY --table /data/table.gbt --link usb \
   --usb-ffs /dev/usb-ffs/gabarit --usb-gadget /sys/kernel/config/usb_gadget/gabarit \
   --window "$WINDOW" --skip-repeats --gpio-chip "$chip" --lock-line 0 --strobe-line 1 --strobe-us 2000 \
-  --reopen-min-ms 200 --reopen-max-ms 400 --frame-timeout-ms 1000
+  --reopen-min-ms 200 --reopen-max-ms 400 --frame-timeout-ms 1000 ${PROFILE:+--profile "$PROFILE"}
 status=$?
 if [ $status != 0 ]; then
   echo "=== the USB side: UDC '$(cat /sys/kernel/config/usb_gadget/gabarit/UDC)', controllers: $(ls /sys/class/udc), devices: $(ls /sys/bus/usb/devices)"

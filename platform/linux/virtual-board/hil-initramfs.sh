@@ -4,8 +4,10 @@
 # libraries (libusb, and libudev under it), the modules prepare.sh cached,
 # the table, the USB gadget script.
 #
-# usage: hil-initramfs.sh --cache DIR --board BIN --relay BIN --table T --window WxH --serial S --out FILE
+# usage: hil-initramfs.sh --cache DIR --board BIN --relay BIN --table T --window WxH --serial S --out FILE [--profile F]
+# --profile: a session profile the board runs (gabarit-board --profile), e.g. the particle tracker.
 set -euo pipefail
+profile=
 here=$(cd "$(dirname "$0")" && pwd)
 while [ $# -gt 0 ]; do
   case "$1" in
@@ -16,10 +18,11 @@ while [ $# -gt 0 ]; do
     --window) window=$2; shift 2 ;;
     --serial) serial=$2; shift 2 ;;
     --out) out=$2; shift 2 ;;
+    --profile) profile=$2; shift 2 ;;
     *) echo "hil-initramfs.sh: unknown argument $1" >&2; exit 2 ;;
   esac
 done
-for f in "$board" "$relay" "$table" "$cache/busybox" "$cache/modules/order"; do
+for f in "$board" "$relay" "$table" "$cache/busybox" "$cache/modules/order" ${profile:+"$profile"}; do
   [ -f "$f" ] || { echo "hil-initramfs.sh: $f is missing" >&2; exit 1; }
 done
 root=$(mktemp -d)
@@ -38,6 +41,10 @@ for lib in libusb-1.0.so.0 libudev.so.1; do cp -L "$multiarch/$lib" "$root/lib/a
 cp "$cache"/modules/*.ko "$cache/modules/order" "$root/modules/"
 cp "$table" "$root/data/table.gbt"
 printf 'WINDOW=%s\nSERIAL=%s\n' "$window" "$serial" > "$root/data/params.sh"
+if [ -n "$profile" ]; then
+  cp "$profile" "$root/data/session.profile"
+  echo "PROFILE=/data/session.profile" >> "$root/data/params.sh"
+fi
 echo "$serial" > "$root/etc/machine-id"
 cp "$here/hil-init.sh" "$root/init"
 chmod +x "$root/init" "$root/bin/usb-gadget.sh"

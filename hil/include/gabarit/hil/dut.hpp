@@ -79,6 +79,7 @@ struct VirtualBoardOptions {
   std::string window;      // WxH: the sequence's frame size (the board tracks that corner of vivid's frame)
   std::string serial = "gabarit-vb-0001";  // the gadget's USB serial number
   std::string log_path;    // the guest's console
+  std::string profile_path;  // a session profile for gabarit-board (--profile); empty: its defaults
 };
 // The virtual board: the board application on Debian's arm64 kernel in
 // qemu-system-aarch64, frames through vivid (V4L2), poses over a USB
