@@ -214,25 +214,42 @@ TEST(SessionProfile, AutoRecoveryIsDetectionWhereTheSessionVerifies) {
   EXPECT_EQ(profile_from_mode_bits(mode_bits(resolve_recovery(d, true), true, true)).recovery, RecoveryKind::kDetection);
 }
 
+// A two-depth grayscale scene of the object's own size, the object hidden
+// for a while, in a temporary folder: its frames, its model (from its two
+// images, Canny) and its first true pose.
+struct OccludedScene {
+  OccludedScene(const char* name, std::uint32_t frames, std::uint32_t occlusion_start, std::uint32_t occlusion_frames)
+      : dir(std::filesystem::temp_directory_path() / (std::string(name) + "-" + std::to_string(::getpid()))) {
+    host::SceneOptions so;
+    so.frames = frames;
+    so.width = 0, so.height = 0;  // the object's own size
+    so.depths = 2;
+    so.occlusion_start = occlusion_start;
+    so.occlusion_frames = occlusion_frames;
+    so.blur_every = 0;
+    host::write_scene_sequence(so, dir.string());
+    host::ImageModelOptions mo;
+    mo.canny = true;
+    model = host::model_from_images({(dir / "model_00.pgm").string(), (dir / "model_01.pgm").string()}, mo);
+    truth = app::read_pose_csv((dir / "gt.csv").string());
+    start = {static_cast<float>(truth[0].x), static_cast<float>(truth[0].y), static_cast<float>(truth[0].theta_deg), 0};
+  }
+  ~OccludedScene() { std::filesystem::remove_all(dir); }
+  std::string frames() const { return (dir / "frames.y4m").string(); }
+  std::vector<std::byte> table() const { return testing::build(model, "-3:3:7", "-3:3:7", "-1:1:3"); }
+  std::filesystem::path dir;
+  host::ModelStack model;
+  std::vector<PoseSample> truth;
+  Pose start;
+};
+
 // The firmware's static twin and the hosted session, on the same grayscale
 // scene (two depths, an occlusion that loses and re-acquires the target):
 // every frame's result bit for bit, from the bits the twin reports in CAPS,
 // as the harness builds its reference.
 TEST(SessionProfile, FirmwareTwinMatchesTheHostedSessionBitForBit) {
-  namespace fs = std::filesystem;
-  const fs::path dir = fs::temp_directory_path() / ("gabarit-profile-test-" + std::to_string(::getpid()));
-  host::SceneOptions so;
-  so.frames = 50;
-  so.width = 0, so.height = 0;  // the object's own size
-  so.depths = 2;
-  so.occlusion_start = 12;
-  so.occlusion_frames = 16;
-  so.blur_every = 0;
-  host::write_scene_sequence(so, dir.string());
-  host::ImageModelOptions mo;
-  mo.canny = true;
-  const std::vector<std::byte> bytes = testing::build(
-      host::model_from_images({(dir / "model_00.pgm").string(), (dir / "model_01.pgm").string()}, mo), "-3:3:7", "-3:3:7", "-1:1:3");
+  const OccludedScene scene("gabarit-profile-test", 50, 12, 16);
+  const std::vector<std::byte> bytes = scene.table();
   const TableView table = testing::open_table(bytes);
   ASSERT_TRUE(table.has_model_images());
 
@@ -246,11 +263,9 @@ TEST(SessionProfile, FirmwareTwinMatchesTheHostedSessionBitForBit) {
   std::vector<std::uint8_t> mask(tracker_mask_bytes(table));
   const TrackerScratch fine{features, counters, mask};
 
-  const auto truth = app::read_pose_csv((dir / "gt.csv").string());
-  const Pose start{static_cast<float>(truth[0].x), static_cast<float>(truth[0].y), static_cast<float>(truth[0].theta_deg), 0};
-  ASSERT_TRUE(twin.start(start));
-  ASSERT_TRUE(hosted.start(start));
-  auto frames = open_frames((dir / "frames.y4m").string());
+  ASSERT_TRUE(twin.start(scene.start));
+  ASSERT_TRUE(hosted.start(scene.start));
+  auto frames = open_frames(scene.frames());
   GrayImage frame;
   int lost = 0, n = 0;
   for (; frames->next(frame); ++n) {
@@ -268,7 +283,6 @@ TEST(SessionProfile, FirmwareTwinMatchesTheHostedSessionBitForBit) {
   }
   EXPECT_EQ(n, 50);
   EXPECT_GT(lost, 0) << "the occlusion should have lost the target (the recovery path is compared too)";
-  fs::remove_all(dir);
 }
 
 
@@ -328,23 +342,11 @@ TEST(SessionProfile, TheParticleTrackerTravelsInTheTextTheOptionsAndCaps) {
 // track --tracker particle runs (run_particle_tracking), bit for bit, on a
 // scene with an occlusion; CAPS reports the measure the table resolves.
 TEST(HostedSession, RunsTheProfilesParticleTrackerAsGabaritTrackDoes) {
-  namespace fs = std::filesystem;
-  const fs::path dir = fs::temp_directory_path() / ("gabarit-particle-session-" + std::to_string(::getpid()));
-  host::SceneOptions so;
-  so.frames = 24;
-  so.width = 0, so.height = 0;
-  so.depths = 2;
-  so.occlusion_start = 8;
-  so.occlusion_frames = 6;
-  so.blur_every = 0;
-  host::write_scene_sequence(so, dir.string());
-  host::ImageModelOptions mo;
-  mo.canny = true;
-  const std::vector<std::byte> bytes = testing::build(
-      host::model_from_images({(dir / "model_00.pgm").string(), (dir / "model_01.pgm").string()}, mo), "-3:3:7", "-3:3:7", "-1:1:3");
+  const OccludedScene scene("gabarit-particle-session", 24, 8, 6);
+  const std::vector<std::byte> bytes = scene.table();
   const TableView table = testing::open_table(bytes);
-  const auto truth = app::read_pose_csv((dir / "gt.csv").string());
-  const Pose start{static_cast<float>(truth[0].x), static_cast<float>(truth[0].y), static_cast<float>(truth[0].theta_deg), 0};
+  const Pose& start = scene.start;
+  const auto& truth = scene.truth;
 
   for (ParticleMeasureKind measure : {ParticleMeasureKind::kAuto, ParticleMeasureKind::kEdges}) {
     SessionProfile p;
@@ -352,7 +354,7 @@ TEST(HostedSession, RunsTheProfilesParticleTrackerAsGabaritTrackDoes) {
     p.particle_measure = measure;
     p.particles = 300;
     std::vector<TrackRow> want;
-    auto frames = open_frames((dir / "frames.y4m").string());
+    auto frames = open_frames(scene.frames());
     run_particle_tracking(table, *frames, start, particle_run_options(p), [&](const TrackRow& row) { want.push_back(row); });
     ASSERT_EQ(want.size(), 24u);
 
@@ -362,7 +364,7 @@ TEST(HostedSession, RunsTheProfilesParticleTrackerAsGabaritTrackDoes) {
     EXPECT_FALSE(hosted.started());
     EXPECT_FALSE(hosted.start(Pose{start.x, start.y, start.theta_deg, 2}));  // a depth the table does not have
     ASSERT_TRUE(hosted.start(start));
-    frames = open_frames((dir / "frames.y4m").string());
+    frames = open_frames(scene.frames());
     GrayImage frame;
     const auto same = [](float x, float y) { return std::memcmp(&x, &y, sizeof x) == 0; };
     std::size_t near = 0;
@@ -389,7 +391,6 @@ TEST(HostedSession, RunsTheProfilesParticleTrackerAsGabaritTrackDoes) {
   app::Rng rng(3);
   const std::vector<std::byte> edges_only = testing::build(testing::point_model(testing::random_points(rng, 40, 20, 2)), "-2:2:5", "-2:2:5");
   EXPECT_THROW(HostedSession(testing::open_table(edges_only), p), Error);  // no model images
-  fs::remove_all(dir);
 }
 
 // The particle HIL firmware's static twin and the hosted session with the
@@ -398,24 +399,12 @@ TEST(HostedSession, RunsTheProfilesParticleTrackerAsGabaritTrackDoes) {
 // intensity measure (a table with model images) and the edge measure (the
 // same model without them), through an occlusion and a restart.
 TEST(SessionProfile, FirmwareParticleTwinMatchesTheHostedSessionBitForBit) {
-  namespace fs = std::filesystem;
-  const fs::path dir = fs::temp_directory_path() / ("gabarit-particle-twin-" + std::to_string(::getpid()));
-  host::SceneOptions so;
-  so.frames = 16;
-  so.width = 0, so.height = 0;
-  so.depths = 2;
-  so.occlusion_start = 6;
-  so.occlusion_frames = 4;
-  so.blur_every = 0;
-  host::write_scene_sequence(so, dir.string());
-  host::ImageModelOptions mo;
-  mo.canny = true;
-  host::ModelStack model = host::model_from_images({(dir / "model_00.pgm").string(), (dir / "model_01.pgm").string()}, mo);
-  const std::vector<std::byte> with_images = testing::build(model, "-3:3:7", "-3:3:7", "-1:1:3");
+  const OccludedScene scene("gabarit-particle-twin", 16, 6, 4);
+  const std::vector<std::byte> with_images = scene.table();
+  host::ModelStack model = scene.model;
   model.images.clear(), model.image_width = model.image_height = 0;
   const std::vector<std::byte> without_images = testing::build(model, "-3:3:7", "-3:3:7", "-1:1:3");
-  const auto truth = app::read_pose_csv((dir / "gt.csv").string());
-  const Pose start{static_cast<float>(truth[0].x), static_cast<float>(truth[0].y), static_cast<float>(truth[0].theta_deg), 0};
+  const Pose& start = scene.start;
 
   const std::uint32_t n = mcu::kFirmwareParticleProfile.particles;
   std::vector<Particle> cloud(particle_scratch_particles(n)), next(particle_scratch_particles(n));
@@ -438,7 +427,7 @@ TEST(SessionProfile, FirmwareParticleTwinMatchesTheHostedSessionBitForBit) {
     for (int run = 0; run < 2; ++run) {  // the second run: a restart, the filter built afresh
       ASSERT_TRUE(twin.start(start));
       ASSERT_TRUE(hosted.start(start));
-      auto frames = open_frames((dir / "frames.y4m").string());
+      auto frames = open_frames(scene.frames());
       int k = 0;
       for (; frames->next(frame); ++k) {
         SessionResult a, b;
@@ -470,7 +459,6 @@ TEST(SessionProfile, FirmwareParticleTwinMatchesTheHostedSessionBitForBit) {
   mcu::FirmwareParticleSession small_map(table, {{cloud, next, order}, std::span(bits).first(8), edge_features, proposer.view(), views, measures});
   ASSERT_TRUE(small_map.start(start));
   EXPECT_EQ(small_map.step(GrayImage(64, 64).view(), r), Status::kBufferTooSmall);
-  fs::remove_all(dir);
 }
 
 }  // namespace
