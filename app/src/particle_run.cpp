@@ -9,16 +9,6 @@
 
 namespace gabarit::app {
 
-const char* name_of(ParticleMeasureKind kind) noexcept {
-  switch (kind) {
-    case ParticleMeasureKind::kAuto: return "auto";
-    case ParticleMeasureKind::kEdges: return "edges";
-    case ParticleMeasureKind::kStencil: return "stencil";
-    case ParticleMeasureKind::kIntensity: return "intensity";
-  }
-  return "?";
-}
-
 ParticleMeasureKind resolved_measure(ParticleMeasureKind kind, const TableView& table) noexcept {
   return resolved_measure(kind, table.has_model_images());
 }

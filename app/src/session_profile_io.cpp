@@ -45,16 +45,6 @@ TrackerKind parse_tracker(const std::string& text, const std::string& what) {
   throw UsageError(what + " '" + text + "': want stencil or particle");
 }
 
-const char* measure_name(ParticleMeasureKind kind) {
-  switch (kind) {
-    case ParticleMeasureKind::kAuto: return "auto";
-    case ParticleMeasureKind::kEdges: return "edges";
-    case ParticleMeasureKind::kStencil: return "stencil";
-    case ParticleMeasureKind::kIntensity: return "intensity";
-  }
-  return "auto";
-}
-
 ParticleMeasureKind parse_measure(const std::string& text, const std::string& what) {
   if (text == "auto") return ParticleMeasureKind::kAuto;
   if (text == "edges") return ParticleMeasureKind::kEdges;
@@ -110,7 +100,7 @@ std::string yes(bool b) { return b ? "true" : "false"; }
 const Key kKeys[] = {
     {"tracker", [](const SessionProfile& p) { return std::string(p.tracker == TrackerKind::kParticle ? "particle" : "stencil"); },
      [](SessionProfile& p, const std::string& v, const std::string& w) { p.tracker = parse_tracker(v, w); }},
-    {"measure", [](const SessionProfile& p) { return std::string(measure_name(p.particle_measure)); },
+    {"measure", [](const SessionProfile& p) { return std::string(name_of(p.particle_measure)); },
      [](SessionProfile& p, const std::string& v, const std::string& w) { p.particle_measure = parse_measure(v, w); }},
     {"plain", [](const SessionProfile& p) { return yes(p.plain); },
      [](SessionProfile& p, const std::string& v, const std::string& w) { p.plain = parse_bool(v, w); }},

@@ -21,8 +21,7 @@
 
 namespace gabarit::app {
 
-// ParticleMeasureKind is the profile's (session_profile.hpp).
-const char* name_of(ParticleMeasureKind kind) noexcept;
+// ParticleMeasureKind and its name_of are the profile's (session_profile.hpp).
 // The measure a table runs: kAuto resolved, the others as they are.
 ParticleMeasureKind resolved_measure(ParticleMeasureKind kind, const TableView& table) noexcept;
 

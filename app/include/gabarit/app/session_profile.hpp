@@ -50,6 +50,16 @@ enum class ParticleMeasureKind : std::uint8_t {
   // step. Needs a table with model images.
   kIntensity = 3,
 };
+// The measure's name in profiles, options and reports ("auto", "edges", ...).
+constexpr const char* name_of(ParticleMeasureKind kind) noexcept {
+  switch (kind) {
+    case ParticleMeasureKind::kAuto: return "auto";
+    case ParticleMeasureKind::kEdges: return "edges";
+    case ParticleMeasureKind::kStencil: return "stencil";
+    case ParticleMeasureKind::kIntensity: return "intensity";
+  }
+  return "?";
+}
 
 // The particle filter's improvements a profile may switch off (bits of
 // SessionProfile::particle_improvements_off); kAllImprovements: plain
