@@ -105,22 +105,23 @@ bool ascent_over(const ImageView& frame, const Pose& pose, const FocusStack& sta
         model_row = m.pixels + std::size_t{v} * m.stride;
         up = v > 0 ? -static_cast<std::ptrdiff_t>(m.stride) : 0;
         down = v + 1 < m.height ? static_cast<std::ptrdiff_t>(m.stride) : 0;
+        return support != nullptr ? support->row_columns(v) : ColumnSpan{0, m.width};
       },
       [&](std::uint32_t u, const FrameSample& at) {
-        if (support != nullptr && !support->contains(u, model_v)) return;
+        const ObjectSupport::Place place = support != nullptr ? support->place(u, model_v) : ObjectSupport::kObject;
+        if (place == ObjectSupport::kOutside) return;
         const std::uint64_t a = model_row[u], b = at.value();
-        const bool object = support == nullptr || support->on_object(u, model_v);
+        const bool object = place == ObjectSupport::kObject;
         add_sample(object ? parts.object_frame : parts.ring_frame, object ? parts.object_model : parts.ring_model, a, b);
         AscentSums& into = object ? row : ring_row;
         // The model's slope (differences across the pixel, one-sided at the
         // image's edge) turned into the frame's axes, and the frame's (for
         // the gain between them).
         const std::uint8_t* p = model_row + u;
+        // Halving is the division by 2, exactly (a power of two), and cheaper.
         const std::ptrdiff_t left = u > 0 ? -1 : 0, right = u + 1 < m.width ? 1 : 0;
-        const float mx =
-            right != left ? static_cast<float>(static_cast<std::int32_t>(p[right]) - p[left]) / static_cast<float>(right - left) : 0.0f;
-        const float rows_apart = static_cast<float>((down != 0 ? 1 : 0) + (up != 0 ? 1 : 0));
-        const float my = rows_apart > 0.0f ? static_cast<float>(static_cast<std::int32_t>(p[down]) - p[up]) / rows_apart : 0.0f;
+        const float mx = static_cast<float>(static_cast<std::int32_t>(p[right]) - p[left]) * (right - left == 2 ? 0.5f : 1.0f);
+        const float my = static_cast<float>(static_cast<std::int32_t>(p[down]) - p[up]) * (up != 0 && down != 0 ? 0.5f : 1.0f);
         const float gx = rotation.cos * mx - rotation.sin * my, gy = rotation.sin * mx + rotation.cos * my;
         const float fx = static_cast<float>(at.central_x()) * (1.0f / 512.0f);
         const float fy = static_cast<float>(at.central_y()) * (1.0f / 512.0f);

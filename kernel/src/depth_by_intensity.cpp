@@ -34,9 +34,10 @@ void correlations(const ImageView& frame, std::span<const ImageView> images, con
       [&](std::uint32_t v) {
         row_v = v;
         for (std::size_t i = 0; i < images.size(); ++i) model_rows[i] = images[i].pixels + std::size_t{v} * images[i].stride;
+        return support != nullptr ? support->row_columns(v) : ColumnSpan{0, images[0].width};
       },
       [&](std::uint32_t u, const FrameSample& at) {
-        if (support != nullptr && !support->contains(u, row_v)) return;
+        if (support != nullptr && support->place(u, row_v) == ObjectSupport::kOutside) return;
         const std::uint64_t b = at.value();
         ++f.n;
         f.b += b;
@@ -63,10 +64,15 @@ bool outline_correlation(const ImageView& frame, const ImageView& m, const Pose&
   OutlineParts parts;
   std::uint32_t model_v = 0;
   walk_samples(
-      frame, m.width, m.height, pose, stack, [&](std::uint32_t v) { model_v = v; },
+      frame, m.width, m.height, pose, stack,
+      [&](std::uint32_t v) {
+        model_v = v;
+        return outline.row_columns(v);
+      },
       [&](std::uint32_t u, const FrameSample& at) {
-        if (!outline.contains(u, model_v)) return;
-        const bool object = outline.on_object(u, model_v);
+        const ObjectSupport::Place place = outline.place(u, model_v);
+        if (place == ObjectSupport::kOutside) return;
+        const bool object = place == ObjectSupport::kObject;
         add_sample(object ? parts.object_frame : parts.ring_frame, object ? parts.object_model : parts.ring_model, m.at(u, model_v),
                    at.value());
       });
@@ -131,9 +137,13 @@ bool frame_variance_at(const ImageView& frame, const Pose& pose, const FocusStac
     FrameSums f;
     std::uint32_t model_v = 0;
     walk_samples(
-        frame, image[0].width, image[0].height, pose, stack, [&](std::uint32_t v) { model_v = v; },
+        frame, image[0].width, image[0].height, pose, stack,
+        [&](std::uint32_t v) {
+          model_v = v;
+          return on_outline ? outline.row_columns(v) : ColumnSpan{0, image[0].width};
+        },
         [&](std::uint32_t u, const FrameSample& at) {
-          if (on_outline && !outline.contains(u, model_v)) return;
+          if (on_outline && outline.place(u, model_v) == ObjectSupport::kOutside) return;
           const std::uint64_t b = at.value();
           ++f.n;
           f.b += b;

@@ -5,6 +5,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <span>
+#include <type_traits>
 
 #include "gabarit/depth_by_intensity.hpp"
 #include "gabarit/deterministic_math.hpp"
@@ -63,7 +64,8 @@ struct ImageSums {
 
 // Walks the model's samples (every stack.step-th pixel of a width x height
 // image, rotated by the pose's angle about the reference point and placed at
-// the pose) over the frame: row(v) at each sampled model row, then
+// the pose) over the frame: row(v) at each sampled model row (which may
+// return the ColumnSpan of the row worth walking), then
 // sample(u, at) for each sample whose 2 x 2 frame neighbourhood lies in the
 // frame, in row order. Sample positions are in 1/65536-pixel fixed point,
 // all integer: the pose and the reference point in 16.16, the rotation in
@@ -115,6 +117,13 @@ struct FrameSample {
   }
 };
 
+// The model columns of a row worth walking, [begin, end): a row callback may
+// return one (ObjectSupport::row_columns) so that the walk skips, without
+// placing them, samples its sample callback would ignore.
+struct ColumnSpan {
+  std::uint32_t begin = 0, end = 0;
+};
+
 template <typename Row, typename Sample>
 inline void walk_samples(const ImageView& frame, std::uint32_t width, std::uint32_t height, const Pose& pose, const FocusStack& stack,
                   Row&& row, Sample&& sample) noexcept {
@@ -136,9 +145,17 @@ inline void walk_samples(const ImageView& frame, std::uint32_t width, std::uint3
       return x >= 0 && y >= 0 && x < x_limit && y < y_limit;
     };
     std::uint32_t k_begin = 0, k_end = columns;
+    if constexpr (std::is_same_v<decltype(row(v)), ColumnSpan>) {
+      const ColumnSpan span = row(v);
+      const std::uint32_t first = (span.begin + stack.step - 1) / stack.step, last = (span.end + stack.step - 1) / stack.step;
+      if (first > k_begin) k_begin = first;
+      if (last < k_end) k_end = last;
+      if (k_end < k_begin) k_end = k_begin;
+    } else {
+      row(v);
+    }
     while (k_begin < k_end && !inside(k_begin)) ++k_begin;
     while (k_end > k_begin && !inside(k_end - 1)) --k_end;
-    row(v);
     std::int64_t px = px0 + std::int64_t{k_begin} * step_x, py = py0 + std::int64_t{k_begin} * step_y;
     for (std::uint32_t k = k_begin; k < k_end; ++k, px += step_x, py += step_y) {
       const auto fx = static_cast<std::uint32_t>(px >> 8), fy = static_cast<std::uint32_t>(py >> 8);
@@ -239,7 +256,58 @@ class ObjectSupport {
     return here || object_at(u - 1, v) || object_at(u + 1, v) || object_at(u, v - 1) || object_at(u, v + 1);
   }
 
+  // Where model pixel (u, v) lies: outside the support, on its ring (in the
+  // support, not on the object) or on the object; contains() and on_object() in one.
+  enum Place { kOutside, kRing, kObject };
+  Place place(std::uint32_t u, std::uint32_t v) const noexcept {
+    if (images_.size() == 1) {  // one image (scoring and refining a pose): its pixels read directly
+      const ImageView& m = images_[0];
+      if (u == 0 || v == 0 || u + 1 >= m.width || v + 1 >= m.height) return kOutside;
+      const std::uint8_t* p = m.pixels + std::size_t{v} * m.stride + u;
+      const auto s = static_cast<std::ptrdiff_t>(m.stride);
+      const bool here = p[0] != surround_;
+      const bool all_around = p[-1] != surround_ && p[1] != surround_ && p[-s] != surround_ && p[s] != surround_;
+      const bool any_around = p[-1] != surround_ || p[1] != surround_ || p[-s] != surround_ || p[s] != surround_;
+      if (extent_ == kInterior) return here && all_around ? kObject : kOutside;
+      return here ? kObject : (any_around ? kRing : kOutside);
+    }
+    return place_in_any(u, v);
+  }
+  // Columns [begin, end) of row v outside which contains(u, v) is false:
+  // from the first and last object pixels of the row (kInterior) or of it
+  // and its neighbours (kOutline), found by scanning in from each side.
+  // Cheaper than asking contains() of every sample of the surround.
+  ColumnSpan row_columns(std::uint32_t v) const noexcept {
+    const ImageView& m = images_[0];
+    if (v == 0 || v + 1 >= m.height || m.width < 3) return {};
+    std::uint32_t begin = m.width - 1, end = 1;  // contained columns lie in [1, width - 1)
+    const auto widen = [&](std::uint32_t r, std::uint32_t grow) {
+      std::uint32_t first = 0;
+      while (first < m.width && !object_at(first, r)) ++first;
+      if (first == m.width) return;
+      std::uint32_t last = m.width - 1;
+      while (!object_at(last, r)) --last;
+      const std::uint32_t lo = first > grow ? first - grow : 0, hi = last + grow + 1;
+      if (lo < begin) begin = lo;
+      if (hi > end) end = hi;
+    };
+    if (extent_ == kInterior) {
+      widen(v, 0);
+    } else {
+      widen(v - 1, 0);
+      widen(v, 1);
+      widen(v + 1, 0);
+    }
+    if (begin < 1) begin = 1;
+    if (end > m.width - 1) end = m.width - 1;
+    return begin < end ? ColumnSpan{begin, end} : ColumnSpan{};
+  }
+
  private:
+  Place place_in_any(std::uint32_t u, std::uint32_t v) const noexcept {
+    if (!contains(u, v)) return kOutside;
+    return object_at(u, v) ? kObject : kRing;
+  }
   bool object_at(std::uint32_t u, std::uint32_t v) const noexcept {
     for (const ImageView& image : images_)
       if (image.at(u, v) != surround_) return true;
