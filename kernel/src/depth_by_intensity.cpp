@@ -37,7 +37,7 @@ void correlations(const ImageView& frame, std::span<const ImageView> images, con
         return support != nullptr ? support->row_columns(v) : ColumnSpan{0, images[0].width};
       },
       [&](std::uint32_t u, const FrameSample& at) {
-        if (support != nullptr && support->place(u, row_v) == ObjectSupport::kOutside) return;
+        if (support != nullptr && !support->contains(u, row_v)) return;
         const std::uint64_t b = at.value();
         ++f.n;
         f.b += b;

@@ -143,6 +143,28 @@ TEST(Voter, CountersSaturateInsteadOfWrapping) {
   EXPECT_EQ(*std::max_element(counters.begin(), counters.end()), kVoteCounterMax);
 }
 
+// A call whose votes cannot reach the maximum counts with plain increments,
+// one that could saturates: on either side of the boundary the counts are
+// what saturating each vote gives (the same pixel voted 100 times, counters
+// starting 100 and 99 below the maximum).
+TEST(Voter, CountsTheSameEitherSideOfWhereACounterCouldSaturate) {
+  const auto bytes = build(point_model({{0, 0}, {1, 0}}), "0:1:2", "0:0:1");
+  const TableView t = testing::open_table(bytes);
+  const std::vector<RoiPoint> same(100, RoiPoint{1, 0});
+  for (const int below : {100, 99}) {
+    std::vector<VoteCounter> counters(t.cell_count(), static_cast<VoteCounter>(kVoteCounterMax - below));
+    std::vector<VoteCounter> expected = counters;
+    VoteTally tally;
+    ASSERT_EQ(accumulate_votes(t, same, counters, tally), Status::kOk);
+    for (std::uint32_t i = t.references_begin(1); i < t.references_begin(2); ++i) {
+      const std::uint32_t c = t.reference(i);
+      expected[c] = static_cast<VoteCounter>(std::min<std::uint32_t>(expected[c] + 100u, kVoteCounterMax));
+    }
+    EXPECT_EQ(counters, expected) << below;
+    EXPECT_GT(tally.votes, 0u);
+  }
+}
+
 TEST(Voter, RejectsFeaturesOutsideTheRoiWithoutTouchingCounters) {
   const auto bytes = build(point_model({{0, 0}, {2, 1}}), "-1:1:3", "-1:1:3");
   const TableView t = testing::open_table(bytes);
