@@ -3,6 +3,7 @@
 #include "gabarit/depth_by_intensity.hpp"
 
 #include "gabarit/deterministic_math.hpp"
+#include "float_lanes.hpp"
 #include "intensity_samples.hpp"
 
 // Eigen as in motion_filter.cpp: fixed-size floats, no heap, scalar code.
@@ -17,14 +18,34 @@ namespace {
 
 // The float sums over the samples: j is d/d(x, y, theta) of the model's
 // value seen through the pose (its slope, and the slope along the rotation),
-// t and b the model's and the frame's values less mid-grey.
+// t and b the model's and the frame's values less mid-grey. Kept four to a
+// FloatLanes, each lane one sum in sample order (the same bits as one sum
+// at a time): lane 3 of j, jt and jb adds zeros; the gain's lanes add their
+// terms times 1, exactly.
 struct AscentSums {
-  float j[3] = {}, jj[6] = {}, jt[3] = {}, jb[3] = {};  // jj: xx, xy, xt, yy, yt, tt
-  float gain_num = 0.0f, gain_den = 0.0f;              // sum frame slope . model slope, sum |model slope|^2
+  FloatLanes j, jt, jb;
+  FloatLanes jj_low, jj_high;  // xx, xy, xt, yy; yt, tt, then the gain's two sums
+  // jj: xx, xy, xt, yy, yt, tt (k = 0..5).
+  float jj(int k) const noexcept { return k < 4 ? jj_low[k] : jj_high[k - 4]; }
+  float gain_num() const noexcept { return jj_high[2]; }  // sum frame slope . model slope
+  float gain_den() const noexcept { return jj_high[3]; }  // sum |model slope|^2
+  // One sample: its slopes js, the model's and the frame's values t and b
+  // (less mid-grey) and the frame's slope (fx, fy).
+  void add_sample(const float (&js)[3], float t, float b, float fx, float fy) noexcept {
+    const FloatLanes lanes(js[0], js[1], js[2], 0.0f);
+    j += lanes;
+    jt += lanes * t;
+    jb += lanes * b;
+    jj_low += FloatLanes(js[0], js[0], js[0], js[1]) * FloatLanes(js[0], js[1], js[2], js[1]);
+    jj_high += FloatLanes(js[1], js[2], fx * js[0] + fy * js[1], js[0] * js[0] + js[1] * js[1]) *
+               FloatLanes(js[2], js[2], 1.0f, 1.0f);
+  }
   void add(const AscentSums& o) noexcept {
-    for (int i = 0; i < 3; ++i) j[i] += o.j[i], jt[i] += o.jt[i], jb[i] += o.jb[i];
-    for (int i = 0; i < 6; ++i) jj[i] += o.jj[i];
-    gain_num += o.gain_num, gain_den += o.gain_den;
+    j += o.j;
+    jt += o.jt;
+    jb += o.jb;
+    jj_low += o.jj_low;
+    jj_high += o.jj_high;
   }
 };
 
@@ -61,12 +82,13 @@ bool solve_normal(const Matrix3& h, const Vector3& g, int dims, Vector3& x) noex
 // disagree. On the scene suite this placed the object better than the
 // correlation's own maximum (docs/tracking.md, "Vote, then verify").
 bool ecc_step(const AscentSums& s, float n, float t_sum, float b_sum, float tb, float bb, int dims, Vector3& step) noexcept {
-  if (!(s.gain_num > 0.0f && s.gain_den > 0.0f)) return false;
-  const float gain = s.gain_num / s.gain_den;
+  const float gain_num = s.gain_num(), gain_den = s.gain_den();
+  if (!(gain_num > 0.0f && gain_den > 0.0f)) return false;
+  const float gain = gain_num / gain_den;
   Matrix3 h;
   const int pair[3][3] = {{0, 1, 2}, {1, 3, 4}, {2, 4, 5}};
   for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 3; ++c) h(r, c) = gain * gain * (s.jj[pair[r][c]] - s.j[r] * s.j[c] / n);
+    for (int c = 0; c < 3; ++c) h(r, c) = gain * gain * (s.jj(pair[r][c]) - s.j[r] * s.j[c] / n);
   Vector3 gt, gb;
   for (int i = 0; i < 3; ++i) gt(i) = gain * (s.jt[i] - s.j[i] * t_sum / n), gb(i) = gain * (s.jb[i] - s.j[i] * b_sum / n);
   Vector3 h_gb;
@@ -112,8 +134,6 @@ bool ascent_over(const ImageView& frame, const Pose& pose, const FocusStack& sta
         if (place == ObjectSupport::kOutside) return;
         const std::uint64_t a = model_row[u], b = at.value();
         const bool object = place == ObjectSupport::kObject;
-        add_sample(object ? parts.object_frame : parts.ring_frame, object ? parts.object_model : parts.ring_model, a, b);
-        AscentSums& into = object ? row : ring_row;
         // The model's slope (differences across the pixel, one-sided at the
         // image's edge) turned into the frame's axes, and the frame's (for
         // the gain between them).
@@ -125,16 +145,20 @@ bool ascent_over(const ImageView& frame, const Pose& pose, const FocusStack& sta
         const float gx = rotation.cos * mx - rotation.sin * my, gy = rotation.sin * mx + rotation.cos * my;
         const float fx = static_cast<float>(at.central_x()) * (1.0f / 512.0f);
         const float fy = static_cast<float>(at.central_y()) * (1.0f / 512.0f);
-        into.gain_num += fx * gx + fy * gy;
-        into.gain_den += gx * gx + gy * gy;
         // d/d(x, y, theta): the slope, and the slope along the rotation of
         // the sample's offset q from the pose, (-q_y, q_x).
         const float qx = static_cast<float>(at.dx) * kOffsetUnit, qy = static_cast<float>(at.dy) * kOffsetUnit;
         const float j[3] = {gx, gy, gy * qx - gx * qy};
         const float t = static_cast<float>(a) - 128.0f, bc = static_cast<float>(b) - 32640.0f;
-        for (int i = 0; i < 3; ++i) into.j[i] += j[i], into.jt[i] += j[i] * t, into.jb[i] += j[i] * bc;
-        into.jj[0] += j[0] * j[0], into.jj[1] += j[0] * j[1], into.jj[2] += j[0] * j[2];
-        into.jj[3] += j[1] * j[1], into.jj[4] += j[1] * j[2], into.jj[5] += j[2] * j[2];
+        // A branch rather than a reference to either side's sums, so that
+        // the compiler may keep the object's (most samples) in registers.
+        if (object) {
+          add_sample(parts.object_frame, parts.object_model, a, b);
+          row.add_sample(j, t, bc, fx, fy);
+        } else {
+          add_sample(parts.ring_frame, parts.ring_model, a, b);
+          ring_row.add_sample(j, t, bc, fx, fy);
+        }
       });
   total.add(row);
   ring_total.add(ring_row);

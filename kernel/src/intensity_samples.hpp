@@ -4,6 +4,7 @@
 #pragma once
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 #include <span>
 #include <type_traits>
 
@@ -226,6 +227,33 @@ struct MatchedBlur {
 //    surround's one-pixel ring around them, so that the outline's contrast
 //    still places a plain object (a silhouette, a glass pipette).
 // (docs/tracking.md, "Vote, then verify", items 2 and 6.)
+// The first column in [from, to) whose pixel differs from `value`, or `to`;
+// eight pixels at a time over a flat run (the surround around a model).
+inline std::uint32_t first_differing(const std::uint8_t* row, std::uint32_t from, std::uint32_t to, std::uint8_t value) noexcept {
+  const std::uint64_t all = std::uint64_t{value} * 0x0101010101010101u;
+  std::uint32_t x = from;
+  for (; x + 8 <= to; x += 8) {
+    std::uint64_t word;
+    std::memcpy(&word, row + x, sizeof word);
+    if (word != all) break;
+  }
+  while (x < to && row[x] == value) ++x;
+  return x;
+}
+// One past the last column in [from, to) whose pixel differs from `value`,
+// or `from`; eight at a time from the end.
+inline std::uint32_t end_of_differing(const std::uint8_t* row, std::uint32_t from, std::uint32_t to, std::uint8_t value) noexcept {
+  const std::uint64_t all = std::uint64_t{value} * 0x0101010101010101u;
+  std::uint32_t x = to;
+  for (; x >= from + 8; x -= 8) {
+    std::uint64_t word;
+    std::memcpy(&word, row + x - 8, sizeof word);
+    if (word != all) break;
+  }
+  while (x > from && row[x - 1] == value) --x;
+  return x;
+}
+
 class ObjectSupport {
  public:
   enum Extent { kInterior, kOutline };
@@ -282,11 +310,15 @@ class ObjectSupport {
     if (v == 0 || v + 1 >= m.height || m.width < 3) return {};
     std::uint32_t begin = m.width - 1, end = 1;  // contained columns lie in [1, width - 1)
     const auto widen = [&](std::uint32_t r, std::uint32_t grow) {
-      std::uint32_t first = 0;
-      while (first < m.width && !object_at(first, r)) ++first;
+      // The row's first and last object pixels: the first and the last
+      // that differ from the surround in any image.
+      std::uint32_t first = m.width;
+      for (const ImageView& image : images_) first = first_differing(image.pixels + std::size_t{r} * image.stride, 0, first, surround_);
       if (first == m.width) return;
-      std::uint32_t last = m.width - 1;
-      while (!object_at(last, r)) --last;
+      std::uint32_t past_last = first + 1;
+      for (const ImageView& image : images_)
+        past_last = end_of_differing(image.pixels + std::size_t{r} * image.stride, past_last, m.width, surround_);
+      const std::uint32_t last = past_last - 1;
       const std::uint32_t lo = first > grow ? first - grow : 0, hi = last + grow + 1;
       if (lo < begin) begin = lo;
       if (hi > end) end = hi;

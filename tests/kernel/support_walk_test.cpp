@@ -12,6 +12,7 @@
 
 #include <cstdint>
 #include <cstring>
+#include <utility>
 #include <vector>
 
 #include "gabarit/app/image_io.hpp"
@@ -98,6 +99,47 @@ TEST(SupportWalk, RowSpansScoreTheSameBitsAsAskingEverySample) {
   EXPECT_GT(scored, 3000u);
   EXPECT_GT(stepped, 500u);
   EXPECT_EQ(digest, 770696138u) << "digest";
+}
+
+// A focus stack whose images' objects differ in extent: the support (and
+// each row's span) is where any image shows the object, so a row's first
+// and last object pixels may come from different images. The second image
+// adds pixels alone far out on rows the first leaves empty or short, a run
+// along a row's right end, and two blocks beside the first's object. Measured on x86-64 before the rows were
+// scanned eight pixels at a time (main at 008e944).
+TEST(SupportWalk, RowSpansOfAStackCoverEveryImagesObject) {
+  std::vector<GrayImage> images{ragged_object(90), ragged_object(170)};
+  for (const auto& [u, v] : {std::pair{2u, 10u}, std::pair{45u, 10u}, std::pair{30u, 1u}, std::pair{12u, 34u}})
+    images[1].at(u, v) = 60;
+  for (std::uint32_t u = 36; u < 46; ++u) images[1].at(u, 25) = 200;
+  // Blocks only the second image shows, left and right of the first's
+  // object on their rows: the depths' interior support (kInterior) is there.
+  for (std::uint32_t v = 24; v < 30; ++v)
+    for (std::uint32_t u = 2; u < 7; ++u) images[1].at(u, v) = static_cast<std::uint8_t>(40 + 7 * u + 3 * v);
+  for (std::uint32_t v = 8; v < 15; ++v)
+    for (std::uint32_t u = 37; u < 45; ++u) images[1].at(u, v) = static_cast<std::uint8_t>(220 - 5 * u + 2 * v);
+  std::vector<ImageView> views;
+  for (const GrayImage& i : images) views.push_back(i.view());
+  const GrayImage f = cluttered_frame(images[0]);
+  std::uint32_t digest = 0, found = 0;
+  for (std::uint32_t step = 1; step <= 2; ++step) {
+    const FocusStack stack{views, 20.0f, 20.0f, step};
+    for (float y = -6.0f; y < 112.0f; y += 7.3f)
+      for (float x = -6.0f; x < 138.0f; x += 8.9f)
+        for (float theta = -170.0f; theta < 180.0f; theta += 61.7f) {
+          // From either depth, with margins that tell how far apart the
+          // depths' scores are: each decision turns on the exact scores.
+          for (const std::uint16_t start : {std::uint16_t{0}, std::uint16_t{1}})
+            for (const float margin : {0.0f, 0.002f, 0.01f, 0.05f, 0.2f}) {
+              std::uint16_t depth = start;
+              const bool ok = depth_by_intensity(f.view(), Pose{x, y, theta, 0}, stack, depth, margin) == Status::kOk;
+              digest = mix(digest, ok ? depth : -3.0f);
+              found += ok && depth != start;
+            }
+        }
+  }
+  EXPECT_GT(found, 100u);  // depths changed
+  EXPECT_EQ(digest, 4143972352u) << "digest";
 }
 
 }  // namespace
