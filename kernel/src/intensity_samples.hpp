@@ -14,10 +14,11 @@
 namespace gabarit::intensity {
 
 // round(x * 2^shift), halves away from zero, exactly: x * 2^shift is exact in
-// float, and so is its fractional part. Precondition: |x * 2^shift| < 2^62.
+// float (one multiplication by the power of two, as exact as doubling
+// `shift` times), and so is its fractional part. Preconditions:
+// 0 <= shift < 63, |x * 2^shift| < 2^62.
 inline std::int64_t round_scaled(float x, int shift) noexcept {
-  float scaled = x;
-  for (int i = 0; i < shift; ++i) scaled *= 2.0f;
+  const float scaled = x * static_cast<float>(std::int64_t{1} << shift);
   const auto whole = static_cast<std::int64_t>(scaled);  // towards zero
   const float fraction = scaled - static_cast<float>(whole);
   return whole + (fraction >= 0.5f ? 1 : 0) - (fraction <= -0.5f ? 1 : 0);

@@ -339,14 +339,15 @@ bool IntensityCorrelationMeasure::listed_correlation(const Pose& pose, OutlineRi
     return px >= 0 && py >= 0 && px < x_limit && py < y_limit;
   };
   // The grid's columns' and rows' rotated offsets (a sample's position is
-  // its column's plus its row's, the very sums it would compute itself).
+  // its column's plus its row's, the very sums it would compute itself),
+  // the pose's position added to the columns' (integers: the same sums).
   std::int64_t column_x[kGridLines], column_y[kGridLines], row_x[kGridLines], row_y[kGridLines];
   const auto place_grid = [&] {
     const std::uint32_t step = stack_.step;
     for (std::uint32_t k = 0; k < grid_columns_; ++k) {
       const std::int64_t du = (std::int64_t{sample_box_[0] + k * step} << 16) - ref_x;
-      column_x[k] = mul_shift(c, du, 30);
-      column_y[k] = mul_shift(sn, du, 30);
+      column_x[k] = x0 + mul_shift(c, du, 30);
+      column_y[k] = y0 + mul_shift(sn, du, 30);
     }
     for (std::uint32_t k = 0; k < grid_rows_; ++k) {
       const std::int64_t dv = (std::int64_t{sample_box_[1] + k * step} << 16) - ref_y;
@@ -359,8 +360,8 @@ bool IntensityCorrelationMeasure::listed_correlation(const Pose& pose, OutlineRi
     std::uint64_t b_sum = 0, bb = 0, ab = 0;
     for (std::uint32_t i = begin; i < end; ++i) {
       const Sample& s = list_[i];
-      const std::int64_t px = x0 + column_x[s.column] - row_x[s.row];
-      const std::int64_t py = y0 + column_y[s.column] + row_y[s.row];
+      const std::int64_t px = column_x[s.column] - row_x[s.row];
+      const std::int64_t py = column_y[s.column] + row_y[s.row];
       FrameSample at;
       at.row0 = frame_.pixels + static_cast<std::size_t>(py >> 16) * frame_.stride + static_cast<std::size_t>(px >> 16);
       at.row1 = at.row0 + frame_.stride;
