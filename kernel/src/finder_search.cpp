@@ -264,7 +264,7 @@ std::uint64_t FinderSearch::feature_index(FinderScratch& scratch, std::uint64_t 
 
 // Step 2: every rotation of the coarse model voted by the coarse features of
 // its channels into one accumulator, whose 3 x 3 peaks go to the shortlist.
-// First the rotation's lists: per channel, each point's index delta in one
+// First the rotation's lists: per channel, each point's vote offset in one
 // or two lists (its rotated orientation's channel and the nearer neighbour).
 std::uint64_t FinderSearch::rotation_lists(FinderScratch& scratch) noexcept {
   rotation_ = next_;
@@ -287,11 +287,13 @@ std::uint64_t FinderSearch::rotation_lists(FinderScratch& scratch) noexcept {
     const float mx = static_cast<float>(p.x), my = static_cast<float>(p.y);
     const std::int32_t rx = round_to_int(sc.cos * mx - sc.sin * my);
     const std::int32_t ry = round_to_int(sc.sin * mx + sc.cos * my);
-    const auto delta = static_cast<std::int32_t>(ry * static_cast<std::int64_t>(astride) + rx);
+    // A feature at accumulator cell f votes for cell f - delta: the lists
+    // hold -delta, the offset the vote adds.
+    const auto offset = static_cast<std::int32_t>(-(ry * static_cast<std::int64_t>(astride) + rx));
     std::uint32_t a, b;
     lists_of(p, turn, g_.orientation, a, b);
-    scratch.rotated[fill[a]++] = delta;
-    if (b != a) scratch.rotated[fill[b]++] = delta;
+    scratch.rotated[fill[a]++] = offset;
+    if (b != a) scratch.rotated[fill[b]++] = offset;
   }
   for (std::size_t i = 0; i < need_.accumulator; ++i) scratch.accumulator[i] = 0;
   channel_ = 0;
@@ -306,7 +308,7 @@ std::uint64_t FinderSearch::rotation_vote(FinderScratch& scratch, std::uint64_t 
   std::uint16_t* acc = scratch.accumulator.data();
   std::uint64_t work = 0;
   while (channel_ < channels) {
-    const std::int32_t* deltas = scratch.rotated.data() + list_begin_[channel_];
+    const std::int32_t* offsets = scratch.rotated.data() + list_begin_[channel_];
     const std::uint32_t nd = list_begin_[channel_ + 1] - list_begin_[channel_];
     const std::uint32_t end = channel_begin_[channel_ + 1];
     if (nd == 0) feature_ = end;
@@ -314,7 +316,15 @@ std::uint64_t FinderSearch::rotation_vote(FinderScratch& scratch, std::uint64_t 
       const std::uint64_t feature_work = nd / kIncrementsPerUnit + 1;
       if (work > 0 && work + feature_work > allowance) return work;
       std::uint16_t* at = acc + scratch.feature_index[feature_];
-      for (std::uint32_t d = 0; d < nd; ++d) ++at[-deltas[d]];
+      // Four at a time (increments commute: the counts are the same).
+      std::uint32_t d = 0;
+      for (; d + 4 <= nd; d += 4) {
+        ++at[offsets[d]];
+        ++at[offsets[d + 1]];
+        ++at[offsets[d + 2]];
+        ++at[offsets[d + 3]];
+      }
+      for (; d < nd; ++d) ++at[offsets[d]];
       work += feature_work;
     }
     ++channel_;
