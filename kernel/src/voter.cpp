@@ -77,7 +77,15 @@ void vote_scalar(const TableView& table, const Offsets& offsets, std::span<const
     } else {
       counters[ref_at(begin)] = static_cast<VoteCounter>(counters[ref_at(begin)] + (begin < end));
       counters[ref_at(begin + 1)] = static_cast<VoteCounter>(counters[ref_at(begin + 1)] + (begin + 1 < end));
-      for (std::uint32_t i = begin + 2; i < end; ++i) ++counters[load_le<Ref>(refs + std::size_t{i} * sizeof(Ref))];
+      const auto plain_vote = [&](std::uint32_t i) { ++counters[load_le<Ref>(refs + std::size_t{i} * sizeof(Ref))]; };
+      std::uint32_t i = begin + 2;
+      for (; i + 4 <= end; i += 4) {  // four at a time: a list names a cell once, and increments commute
+        plain_vote(i);
+        plain_vote(i + 1);
+        plain_vote(i + 2);
+        plain_vote(i + 3);
+      }
+      for (; i < end; ++i) plain_vote(i);
     }
     votes += end - begin;
   };
