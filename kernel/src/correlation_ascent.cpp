@@ -139,9 +139,18 @@ bool ascent_over(const ImageView& frame, const Pose& pose, const FocusStack& sta
         // the gain between them).
         const std::uint8_t* p = model_row + u;
         // Halving is the division by 2, exactly (a power of two), and cheaper.
-        const std::ptrdiff_t left = u > 0 ? -1 : 0, right = u + 1 < m.width ? 1 : 0;
-        const float mx = static_cast<float>(static_cast<std::int32_t>(p[right]) - p[left]) * (right - left == 2 ? 0.5f : 1.0f);
-        const float my = static_cast<float>(static_cast<std::int32_t>(p[down]) - p[up]) * (up != 0 && down != 0 ? 0.5f : 1.0f);
+        // A support's samples lie a pixel inside the image (row_columns):
+        // both neighbours always, without asking.
+        float mx = 0.0f, my = 0.0f;
+        if (support != nullptr) {
+          const auto s = static_cast<std::ptrdiff_t>(m.stride);
+          mx = static_cast<float>(static_cast<std::int32_t>(p[1]) - p[-1]) * 0.5f;
+          my = static_cast<float>(static_cast<std::int32_t>(p[s]) - p[-s]) * 0.5f;
+        } else {
+          const std::ptrdiff_t left = u > 0 ? -1 : 0, right = u + 1 < m.width ? 1 : 0;
+          mx = static_cast<float>(static_cast<std::int32_t>(p[right]) - p[left]) * (right - left == 2 ? 0.5f : 1.0f);
+          my = static_cast<float>(static_cast<std::int32_t>(p[down]) - p[up]) * (up != 0 && down != 0 ? 0.5f : 1.0f);
+        }
         const float gx = rotation.cos * mx - rotation.sin * my, gy = rotation.sin * mx + rotation.cos * my;
         const float fx = static_cast<float>(at.central_x()) * (1.0f / 512.0f);
         const float fy = static_cast<float>(at.central_y()) * (1.0f / 512.0f);
