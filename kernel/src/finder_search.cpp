@@ -335,6 +335,49 @@ std::uint64_t FinderSearch::rotation_vote(FinderScratch& scratch, std::uint64_t 
   return work + 1;
 }
 
+namespace {
+
+// Whether any of kScanChunk counts reaches `least` (>= 1). Four 16-bit counts
+// to a 64-bit word: a count v <= 0x7FFF has its lane's top bit set by
+// v + (0x7FFF - (least - 1)) exactly when v >= least, without a carry out of
+// the lane; a larger count sets it itself (the OR with the word), and then
+// reaches any least up to 0x8000 (a carry it may send into the next lane
+// only adds a true to a true). Larger leasts: one count at a time.
+constexpr bool chunk_reaches(const std::uint16_t* counts, std::uint32_t least) noexcept {
+  static_assert(kScanChunk % 4 == 0, "whole words");
+  if (least > 0x8000u) {
+    for (std::uint32_t k = 0; k < kScanChunk; ++k)
+      if (counts[k] >= least) return true;
+    return false;
+  }
+  constexpr std::uint64_t kLanes = 0x0001000100010001u, kTops = 0x8000800080008000u;
+  const std::uint64_t lift = (0x7FFFu - (least - 1)) * kLanes;
+  std::uint64_t tops = 0;
+  for (std::uint32_t k = 0; k < kScanChunk; k += 4) {
+    // Shifts rather than a copy of the bytes (constexpr; compilers merge it
+    // into one load). Which lane a count takes does not matter.
+    const std::uint64_t word = std::uint64_t{counts[k]} | std::uint64_t{counts[k + 1]} << 16 |
+                               std::uint64_t{counts[k + 2]} << 32 | std::uint64_t{counts[k + 3]} << 48;
+    tops |= (word + lift) | word;
+  }
+  return (tops & kTops) != 0;
+}
+// A chunk of zeros but one count at `at`, asked whether it reaches `least`.
+constexpr bool one_count_reaches(std::uint32_t at, std::uint16_t count, std::uint32_t least) noexcept {
+  std::uint16_t counts[kScanChunk] = {};
+  counts[at] = count;
+  return chunk_reaches(counts, least);
+}
+// Every lane, either side of least, and counts past 0x7FFF (whose carry
+// into the next lane must not matter) and leasts past 0x8000.
+static_assert(one_count_reaches(0, 5, 5) && !one_count_reaches(0, 4, 5) && one_count_reaches(7, 2, 2) && !one_count_reaches(13, 1, 2));
+static_assert(one_count_reaches(3, 0x7FFF, 0x7FFF) && !one_count_reaches(3, 0x7FFE, 0x7FFF) && one_count_reaches(15, 0xFFFF, 2));
+static_assert(one_count_reaches(2, 0x8000, 0x8000) && !one_count_reaches(2, 0x7FFF, 0x8000) && one_count_reaches(11, 0x8001, 0x8001));
+static_assert(!one_count_reaches(11, 0x8000, 0x8001) && one_count_reaches(12, 0xFFFF, 0xFFFF) && !one_count_reaches(12, 0xFFFF, 0x10000));
+static_assert(!one_count_reaches(0, 0, 2) && one_count_reaches(4, 0x9000, 3) && !one_count_reaches(9, 0x1234, 0x1235));
+
+}  // namespace
+
 // The peaks, row by row: local maxima whose 3 x 3 sum could enter the shortlist.
 std::uint64_t FinderSearch::rotation_scan(FinderScratch& scratch, std::uint64_t allowance) noexcept {
   const std::uint32_t cw = g_.coarse_width, ch = g_.coarse_height;
@@ -346,16 +389,12 @@ std::uint64_t FinderSearch::rotation_scan(FinderScratch& scratch, std::uint64_t 
     const std::uint32_t y = next_++;
     const std::uint16_t* row = acc + (std::size_t{y} + g_.pad) * astride + g_.pad;
     // No peak can enter below this: most of a row is skipped kScanChunk
-    // cells at a time on its largest count (a loop compilers vectorise).
+    // cells at a time where none reaches it (chunk_reaches).
     const std::uint32_t least = floor_votes_ / 9 + 1 > 2 ? floor_votes_ / 9 + 1 : 2;
     for (std::uint32_t x = 0; x < cw; ++x) {
-      if ((x & (kScanChunk - 1)) == 0 && x + kScanChunk <= cw) {
-        std::uint16_t most = 0;
-        for (std::uint32_t k = 0; k < kScanChunk; ++k) most = row[x + k] > most ? row[x + k] : most;
-        if (most < least) {
-          x += kScanChunk - 1;
-          continue;
-        }
+      if ((x & (kScanChunk - 1)) == 0 && x + kScanChunk <= cw && !chunk_reaches(row + x, least)) {
+        x += kScanChunk - 1;
+        continue;
       }
       const std::uint32_t v = row[x];
       if (v < 2 || 9 * v <= floor_votes_) continue;
