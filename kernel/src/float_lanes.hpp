@@ -13,7 +13,12 @@
 
 namespace gabarit {
 
-#if defined(__GNUC__)  // GCC and Clang: their generic vectors
+// GCC's and Clang's generic vectors, which every toolchain the kernel
+// builds with (host, aarch64, armhf, arm-none-eabi) has; on a target
+// without a SIMD unit they are lowered to the scalar operations.
+#if !defined(__GNUC__)
+#error "FloatLanes needs GCC or Clang generic vectors (__attribute__((vector_size)))"
+#endif
 class FloatLanes {
  public:
   FloatLanes() noexcept = default;
@@ -31,24 +36,5 @@ class FloatLanes {
   explicit FloatLanes(Vector v) noexcept : v_(v) {}
   Vector v_ = {0.0f, 0.0f, 0.0f, 0.0f};
 };
-#else
-class FloatLanes {
- public:
-  FloatLanes() noexcept = default;
-  FloatLanes(float a, float b, float c, float d) noexcept : v_{a, b, c, d} {}
-  float operator[](int i) const noexcept { return v_[i]; }
-  FloatLanes& operator+=(const FloatLanes& o) noexcept {
-    for (int i = 0; i < 4; ++i) v_[i] += o.v_[i];
-    return *this;
-  }
-  friend FloatLanes operator*(const FloatLanes& a, const FloatLanes& b) noexcept {
-    return {a.v_[0] * b.v_[0], a.v_[1] * b.v_[1], a.v_[2] * b.v_[2], a.v_[3] * b.v_[3]};
-  }
-  friend FloatLanes operator*(const FloatLanes& a, float s) noexcept { return a * FloatLanes(s, s, s, s); }
-
- private:
-  float v_[4] = {};
-};
-#endif
 
 }  // namespace gabarit
