@@ -210,24 +210,6 @@ struct MatchedBlur {
   }
 };
 
-// The object's own pixels in stack images drawn on a flat surround (every
-// pixel of the first image's border one grey value, as a model rendered or
-// cut out onto a uniform background is). Where the images show that value
-// there is no object, and the frame shows whatever lies behind it: its
-// samples there tell nothing of the pose or the depth, yet they weighed in
-// the correlation through the model's mean and variance, as much as the
-// object's own. A stack cut from a camera's images has no flat border:
-// every sample is used.
-//  - Comparing depths (kInterior): the object's pixels but the one-pixel rim
-//    next to the surround, part object and part surround. Over every sample
-//    the depth followed how the object's mean grey stood against the frame's
-//    surround, which the depths' blur shifts slightly at the rim: on a cat
-//    over a printed page the true depth of a 7-depth stack won at the true
-//    pose on 30 of 160 frames (145 over the object).
-//  - Scoring and refining a pose (kOutline): the object's pixels and the
-//    surround's one-pixel ring around them, so that the outline's contrast
-//    still places a plain object (a silhouette, a glass pipette).
-// (docs/tracking.md, "Vote, then verify", items 2 and 6.)
 // The first column in [from, to) whose pixel differs from `value`, or `to`;
 // eight pixels at a time over a flat run (the surround around a model).
 inline std::uint32_t first_differing(const std::uint8_t* row, std::uint32_t from, std::uint32_t to, std::uint8_t value) noexcept {
@@ -255,6 +237,24 @@ inline std::uint32_t end_of_differing(const std::uint8_t* row, std::uint32_t fro
   return x;
 }
 
+// The object's own pixels in stack images drawn on a flat surround (every
+// pixel of the first image's border one grey value, as a model rendered or
+// cut out onto a uniform background is). Where the images show that value
+// there is no object, and the frame shows whatever lies behind it: its
+// samples there tell nothing of the pose or the depth, yet they weighed in
+// the correlation through the model's mean and variance, as much as the
+// object's own. A stack cut from a camera's images has no flat border:
+// every sample is used.
+//  - Comparing depths (kInterior): the object's pixels but the one-pixel rim
+//    next to the surround, part object and part surround. Over every sample
+//    the depth followed how the object's mean grey stood against the frame's
+//    surround, which the depths' blur shifts slightly at the rim: on a cat
+//    over a printed page the true depth of a 7-depth stack won at the true
+//    pose on 30 of 160 frames (145 over the object).
+//  - Scoring and refining a pose (kOutline): the object's pixels and the
+//    surround's one-pixel ring around them, so that the outline's contrast
+//    still places a plain object (a silhouette, a glass pipette).
+// (docs/tracking.md, "Vote, then verify", items 2 and 6.)
 class ObjectSupport {
  public:
   enum Extent { kInterior, kOutline };
