@@ -80,10 +80,13 @@ struct FrameSample {
   std::int64_t dx, dy;       // the sample's offset from the pose, 16.16 (the rotated model offset)
   // The frame sampled bilinearly, in 1/256 (0 .. 255 * 256): the correlation
   // then varies smoothly with the pose.
+  // Written as a * 256 + (b - a) * w rather than a * (256 - w) + b * w: the
+  // same integer (unsigned arithmetic wraps exactly and the result is in
+  // range), without a register holding 256 in the hot loops that call it.
   std::uint32_t value() const noexcept {
-    const std::uint32_t top = row0[0] * (256u - wx) + row0[1] * wx;
-    const std::uint32_t bottom = row1[0] * (256u - wx) + row1[1] * wx;
-    return (top * (256u - wy) + bottom * wy + 128u) >> 8;
+    const std::uint32_t top = (std::uint32_t{row0[0]} << 8) + (std::uint32_t{row0[1]} - row0[0]) * wx;
+    const std::uint32_t bottom = (std::uint32_t{row1[0]} << 8) + (std::uint32_t{row1[1]} - row1[0]) * wx;
+    return ((top << 8) + (bottom - top) * wy + 128u) >> 8;
   }
   // The bilinear interpolant's derivatives along x and y at the sample, in
   // the same 1/256 units per pixel (-255 * 256 .. 255 * 256).

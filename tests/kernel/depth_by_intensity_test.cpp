@@ -428,7 +428,8 @@ TEST(IntensityCorrelationMeasure, ScoresTheListedOutlineAsTheVerifiedScoreDoes) 
 }
 
 // The listed score's faster path (every sample in the frame: no bounds
-// check, the model's sums precomputed, the grid's lines placed once) gives
+// check, the model's sums precomputed, the grid's lines placed once, the
+// samples walked run by run along the grid's rows) gives
 // the bits the plain loop over the samples gave: a digest of the scores of
 // poses all over the frame, inside it, across its edges and off it, at two
 // depths and many angles, measured on x86-64 with the faster path switched

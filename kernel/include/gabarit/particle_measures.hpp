@@ -216,6 +216,10 @@ class IntensityCorrelationMeasure {
     // box ((u - box u min) / step, likewise v), when the box spans at most
     // kGridLines of each.
     std::uint8_t column = 0, row = 0;
+    // With the grid: at the first sample of a run (the samples after it in
+    // the list on the same grid row, at the next columns, in the same part),
+    // the run's length (1..255); 0 within a run. Runs tile each part.
+    std::uint8_t run = 0;
   };
   static constexpr std::uint32_t kGridLines = 128;
   // The correlation over the list: false where fewer than 16 samples fall
