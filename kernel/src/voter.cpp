@@ -206,28 +206,50 @@ Status select_top_cells(const TableView& table, std::span<const VoteCounter> cou
                         std::span<CellScore> top) noexcept {
   GABARIT_TRY(check_counters(table, counters));
   if (top.empty() || top.size() > table.cell_count()) return Status::kInvalidArgument;
+  // Cells arrive in increasing index order, so a cell equal to one already
+  // held never displaces it: ties keep the lowest index.
   std::size_t filled = 0;
-  for (std::uint32_t cell = 0; cell < table.cell_count(); ++cell) {
-    const CellScore s{cell, counters[cell], table.stencil_size(cell)};
-    // Cells arrive in increasing index order, so a cell equal to one already
-    // held never displaces it: ties keep the lowest index.
-    if (filled == top.size() && !ranks_before(s, top[filled - 1])) continue;
+  const auto insert = [&](const CellScore& s) {
     std::size_t at = filled < top.size() ? filled++ : filled - 1;
     while (at > 0 && ranks_before(s, top[at - 1])) {
       top[at] = top[at - 1];
       --at;
     }
     top[at] = s;
+  };
+  const std::uint32_t cells = table.cell_count();
+  std::uint32_t cell = 0;
+  for (; cell < cells && filled < top.size(); ++cell) insert({cell, counters[cell], table.stencil_size(cell)});
+  // Then most cells rank below the last held one, and ranks_before(s, last)
+  // is s.votes * last's size > last's votes * s's size (sizes guarded as
+  // ranks_before guards them): its two terms kept in registers.
+  const auto guarded = [](std::uint32_t size) { return std::uint64_t{size == 0 ? 1u : size}; };
+  std::uint64_t last_votes = top[filled - 1].votes, last_size = guarded(top[filled - 1].stencil_size);
+  for (; cell < cells; ++cell) {
+    const CellScore s{cell, counters[cell], table.stencil_size(cell)};
+    if (std::uint64_t{s.votes} * last_size <= last_votes * guarded(s.stencil_size)) continue;
+    insert(s);
+    last_votes = top[filled - 1].votes;
+    last_size = guarded(top[filled - 1].stencil_size);
   }
   return Status::kOk;
 }
 
 CellScore best_cell_in(const TableView& table, std::span<const VoteCounter> counters, CellRange range) noexcept {
   GABARIT_ASSERT(range.begin <= range.end && range.end <= table.cell_count() && counters.size() >= range.end);
-  CellScore best{kNoCell, 0, 0};
-  for (std::uint32_t c = range.begin; c < range.end; ++c) {
+  if (range.begin == range.end) return {kNoCell, 0, 0};
+  CellScore best{range.begin, counters[range.begin], table.stencil_size(range.begin)};
+  // Cells in increasing index order: ranks_before(s, best) is s.votes *
+  // best's size > best's votes * s's size (a tie keeps the lower index),
+  // its two terms kept in registers.
+  const auto guarded = [](std::uint32_t size) { return std::uint64_t{size == 0 ? 1u : size}; };
+  std::uint64_t best_votes = best.votes, best_size = guarded(best.stencil_size);
+  for (std::uint32_t c = range.begin + 1; c < range.end; ++c) {
     const CellScore s{c, counters[c], table.stencil_size(c)};
-    if (best.cell == kNoCell || ranks_before(s, best)) best = s;
+    if (std::uint64_t{s.votes} * best_size <= best_votes * guarded(s.stencil_size)) continue;
+    best = s;
+    best_votes = s.votes;
+    best_size = guarded(s.stencil_size);
   }
   return best;
 }

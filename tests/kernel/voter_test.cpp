@@ -132,6 +132,27 @@ TEST(Voter, TopKIsTheSortedOrderOfAllCells) {
   }
 }
 
+// best_cell_in is the first of its range in ranks_before's order, ties
+// to the lowest index, and kNoCell for an empty range.
+TEST(Voter, BestCellInARangeIsTheFirstOfItsSortedOrder) {
+  app::Rng rng(13);
+  const auto bytes = build(point_model(testing::random_points(rng, 40, 12)), "-5:5:11", "-5:5:11", "0:0:1", 0.3, 4);
+  const TableView t = testing::open_table(bytes);
+  EXPECT_EQ(best_cell_in(t, std::vector<VoteCounter>(t.cell_count()), CellRange{3, 3}).cell, kNoCell);
+  for (int round = 0; round < 40; ++round) {
+    std::vector<VoteCounter> counters(t.cell_count());
+    for (auto& c : counters) c = static_cast<VoteCounter>(rng.next_u32() % 6);  // many ties
+    const std::uint32_t begin = rng.next_u32() % t.cell_count();
+    const std::uint32_t end = begin + 1 + rng.next_u32() % (t.cell_count() - begin);
+    std::vector<CellScore> range;
+    for (std::uint32_t c = begin; c < end; ++c) range.push_back({c, counters[c], t.stencil_size(c)});
+    std::sort(range.begin(), range.end(), ranks_before);
+    const CellScore best = best_cell_in(t, counters, CellRange{begin, end});
+    EXPECT_EQ(best.cell, range.front().cell) << begin << ".." << end;
+    EXPECT_EQ(best.votes, range.front().votes);
+  }
+}
+
 TEST(Voter, CountersSaturateInsteadOfWrapping) {
   const auto bytes = build(point_model({{0, 0}, {1, 0}}), "0:1:2", "0:0:1");
   const TableView t = testing::open_table(bytes);
