@@ -101,6 +101,11 @@ void HostedSession::fit_frame(std::uint32_t width, std::uint32_t height) {
   if (detection && !detection_) {
     detection_.emplace(finder_, extras_.finder, finder_buffers_->scratch(buffers_.scratch().fine));
     session_->use_detection_recovery(&*detection_);
+    if (stack_in_use_ != nullptr && !scan_) {
+      scan_ = std::make_unique<IntensityScan>();
+      scan_->reset(table_, *stack_in_use_, IntensityScanOptions{});
+    }
+    if (scan_) session_->use_intensity_scan(scan_.get());
   }
   if (profile_.recovery == RecoveryKind::kParticles && !particles_) {
     // Its edge map is the first frame's size.

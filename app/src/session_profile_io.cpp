@@ -294,7 +294,8 @@ std::vector<Option> session_option_group() {
       {"--refine", "", "with --plain: sub-cell x, y, theta from the neighbouring cells' scores (default on)"},
       {"--recover", "", "with --plain: once lost, search around the last confident pose (default on)"},
       {"--recovery", "auto|grid|detect|particle", "how the session re-acquires a lost target: the grid search around where" + indent +
-                                                 "it was last seen, detection over the whole frame (docs/detection.md), or a" + indent +
+                                                 "it was last seen, detection over the whole frame (with a focus stack, also poses" + indent +
+                                                 "near the last sighting scored by intensity; docs/detection.md), or a" + indent +
                                                  "particle filter over the whole frame (docs/particle-filter.md); auto (default):" + indent +
                                                  "detection with a grayscale table that carries model images, else the grid"},
       {"--detect-after", "N", "--recovery detect (and auto): the first N lost frames search with the grid, the later ones" + indent +

@@ -437,6 +437,36 @@ Status TrackingSession::track_fine(const ImageView& image, SessionScratch scratc
 }
 
 Status TrackingSession::recover(const ImageView& image, SessionScratch scratch, SessionResult& out) noexcept {
+  GABARIT_TRY(recover_by_stage(image, scratch, out));
+  if (out.reacquired || scan_ == nullptr || !verifying() || !(verified_reference_ > 0.0f)) return Status::kOk;
+  return recover_by_scan(image, out);
+}
+
+Status TrackingSession::recover_by_scan(const ImageView& image, SessionResult& out) noexcept {
+  const std::uint64_t began = read_ticks(clock_);
+  IntensityScanResult scanned;
+  const Status status = scan_->run(image, last_confident_, scanned);
+  ledger_.add(FramePhase::kRecovery, std::uint64_t{scanned.poses} * scan_->samples(), read_ticks(clock_) - began);
+  // A scan that cannot run (a stack without samples) leaves the frame lost.
+  if (status != Status::kOk || !scanned.scored) return Status::kOk;
+  if (detection_ != nullptr && !detection_->within_reach(last_confident_, scanned.best)) return Status::kOk;
+  Proposals candidate;
+  candidate.add(scanned.best);
+  Pose found_pose;
+  verdict_taken_ = false;
+  GABARIT_TRY(verify_choice(image, candidate, Confidence::kNone, found_pose));
+  if (!verdict_taken_ || (detection_ != nullptr && !detection_->within_reach(last_confident_, found_pose))) return Status::kOk;
+  pose_ = found_pose;
+  filter_.restart(pose_);
+  lost_ = false;
+  out.reacquired = true;
+  out.confidence = Confidence::kIntermediate;
+  out.state = TrackState::kUncertain;
+  out.pose = pose_;
+  return Status::kOk;
+}
+
+Status TrackingSession::recover_by_stage(const ImageView& image, SessionScratch scratch, SessionResult& out) noexcept {
   SearchResult found;
   // The depth last seen with confidence: the frames since, unsure, may have
   // set the pose's depth from clutter.

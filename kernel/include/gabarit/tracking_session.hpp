@@ -21,6 +21,7 @@
 #include "gabarit/depth_by_intensity.hpp"
 #include "gabarit/detection_recovery.hpp"
 #include "gabarit/frame_ledger.hpp"
+#include "gabarit/intensity_scan.hpp"
 #include "gabarit/model_finder.hpp"
 #include "gabarit/motion_filter.hpp"
 #include "gabarit/particle_recovery.hpp"
@@ -180,6 +181,12 @@ class TrackingSession {
   // survey (survey_frames) and each search (recovery_frames) may be spread
   // over frames.
   void use_detection_recovery(DetectionRecovery* stage) noexcept { detection_ = stage; }
+  // With an intensity scan (intensity_scan.hpp; must outlive the session;
+  // nullptr to stop), verifying, a lost frame the recovery stage did not end
+  // scores poses around the last sighting by intensity, and its best is
+  // taken where the verification takes it (as a search's weak vote is), and
+  // where the detection stage's reach and look-alikes allow.
+  void use_intensity_scan(IntensityScan* stage) noexcept { scan_ = stage; }
   // With a clock (nullptr to stop), each frame's ledger is timed phase by
   // phase (SessionResult::ledger); the poses are the same either way.
   void use_clock(TickSource clock) noexcept { clock_ = clock; }
@@ -210,6 +217,8 @@ class TrackingSession {
   SubCellOffset sub_cell(SessionScratch scratch, const StepResult& step, std::uint32_t cell) const noexcept;
   Status track_fine(const ImageView& image, SessionScratch scratch, SessionResult& out) noexcept;
   Status recover(const ImageView& image, SessionScratch scratch, SessionResult& out) noexcept;
+  Status recover_by_stage(const ImageView& image, SessionScratch scratch, SessionResult& out) noexcept;
+  Status recover_by_scan(const ImageView& image, SessionResult& out) noexcept;
   void begin_lost() noexcept;
   // Binary frames (the thesis's synthetic sequences) have no intensities to
   // correlate: their votes decide.
@@ -232,6 +241,7 @@ class TrackingSession {
   const FocusStack* stack_ = nullptr;
   ParticleRecovery* particles_ = nullptr;
   DetectionRecovery* detection_ = nullptr;
+  IntensityScan* scan_ = nullptr;
   std::uint32_t lost_frames_ = 0;  // frames of this lost period so far
   bool surveyed_ = false;          // the survey for look-alikes begun
   std::uint64_t frame_work_ = 0;   // the running mean of tracked frames' work (0: none yet)

@@ -86,6 +86,7 @@ class HostedSession {
   ModelFinder finder_;
   std::optional<FinderBuffers> finder_buffers_;
   std::optional<DetectionRecovery> detection_;
+  std::unique_ptr<IntensityScan> scan_;  // with detection and a focus stack (intensity_scan.hpp)
   std::unique_ptr<ParticleTracker> particles_;
   std::optional<ParticleRecovery> particle_recovery_;
   bool particle_started_ = false;  // the particle tracker: started, built at the first frame
