@@ -446,7 +446,7 @@ Status TrackingSession::recover_by_scan(const ImageView& image, SessionResult& o
   const std::uint64_t began = read_ticks(clock_);
   IntensityScanResult scanned;
   const Status status = scan_->run(image, last_confident_, scanned);
-  ledger_.add(FramePhase::kRecovery, std::uint64_t{scanned.poses} * scan_->samples(), read_ticks(clock_) - began);
+  ledger_.add(FramePhase::kRecovery, scanned.work, read_ticks(clock_) - began);
   // A scan that cannot run (a stack without samples) leaves the frame lost.
   if (status != Status::kOk || !scanned.scored) return Status::kOk;
   if (detection_ != nullptr && !detection_->within_reach(last_confident_, scanned.best)) return Status::kOk;

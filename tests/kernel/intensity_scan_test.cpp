@@ -58,8 +58,9 @@ struct Rig {
 // The disc reappears 24 px right of and 12 px above where it was last seen,
 // 10 frames ago, turned back to 0 degrees from the sighting's 10: the grid
 // (reach min(5 x 11, 44) px, angles min(2 x 11, 24) degrees either side, 6 px
-// and 8 degrees apart) holds a pose within half a step of it, which scores
-// best; 15 x 15 positions at 5 angles were scored.
+// and 4 degrees apart) holds a pose within half a step of it, which scores
+// best; 15 x 15 positions at 11 angles were screened on 64 samples, the best
+// 16 scored on 256.
 TEST(IntensityScan, FindsTheTargetWithinTheReachOfTheLastSighting) {
   Rig r;
   IntensityScan scan;
@@ -70,7 +71,10 @@ TEST(IntensityScan, FindsTheTargetWithinTheReachOfTheLastSighting) {
   last.frames_since = 10;
   IntensityScanResult out;
   ASSERT_EQ(scan.run(f.view(), last, out), Status::kOk);
-  EXPECT_EQ(out.poses, 15u * 15u * 5u);
+  EXPECT_EQ(out.poses, 15u * 15u * 11u);
+  // At most 64 and 256 samples each (the measures list fewer on a small disc).
+  EXPECT_LE(out.work, 15u * 15u * 11u * 64u + 16u * 256u);
+  EXPECT_GT(out.work, 15u * 15u * 11u * 16u);
   ASSERT_TRUE(out.scored);
   EXPECT_NEAR(out.best.x, 124.0f, 3.0f);
   EXPECT_NEAR(out.best.y, 88.0f, 3.0f);
@@ -125,6 +129,13 @@ TEST(IntensityScan, RejectsWhatItCannotScan) {
   IntensityScanOptions few;
   few.samples = 8;
   EXPECT_FALSE(valid(few));
+  IntensityScanOptions none_kept, too_many_kept, few_screened;
+  none_kept.kept = 0;
+  too_many_kept.kept = kMaxScanKept + 1;
+  few_screened.screen_samples = 15;
+  EXPECT_FALSE(valid(none_kept));
+  EXPECT_FALSE(valid(too_many_kept));
+  EXPECT_FALSE(valid(few_screened));
   EXPECT_TRUE(valid(IntensityScanOptions{}));
   // Invalid options leave the scan unable to run rather than half set.
   IntensityScan bad;
