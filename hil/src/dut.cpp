@@ -24,6 +24,15 @@
 namespace gabarit::hil {
 namespace {
 
+// A driver's link, which exists from start() to stop(): asked for outside
+// that (a DUT that could not be started again), it is an error, never a
+// null dereference.
+template <class T>
+Transport& started(const std::unique_ptr<T>& link) {
+  if (!link) throw app::Error("the DUT is not running (it could not be started)");
+  return *link;
+}
+
 std::uint64_t steady_micros() {
   return static_cast<std::uint64_t>(
       std::chrono::duration_cast<std::chrono::microseconds>(Clock::now().time_since_epoch()).count());
@@ -85,7 +94,7 @@ class InprocessDut final : public DutDriver {
     loopback_.reset();
   }
 
-  Transport& transport() override { return *host_; }
+  Transport& transport() override { return started(host_); }
 
  private:
   void run(Transport& end) noexcept {
@@ -209,7 +218,7 @@ class ProcessDut final : public DutDriver {
     transport_.reset();
   }
 
-  Transport& transport() override { return *transport_; }
+  Transport& transport() override { return started(transport_); }
 
  private:
   std::string kind_;
@@ -322,7 +331,7 @@ class QemuDut final : public DutDriver {
     ::unlink(socket_path_.c_str());
   }
 
-  Transport& transport() override { return *transport_; }
+  Transport& transport() override { return started(transport_); }
 
  private:
   QemuOptions options_;
@@ -399,7 +408,7 @@ class VirtualBoardDut final : public DutDriver {
     ::unlink(socket_path_.c_str());
   }
 
-  Transport& transport() override { return *transport_; }
+  Transport& transport() override { return started(transport_); }
 
  private:
   VirtualBoardOptions options_;
@@ -447,7 +456,7 @@ class BoardDut final : public DutDriver {
     transport_ = std::make_unique<StreamTransport>(fd, fd, board_.name + " relay");
   }
   void stop() noexcept override { transport_.reset(); }
-  Transport& transport() override { return *transport_; }
+  Transport& transport() override { return started(transport_); }
 
  private:
   int open_serial() const {

@@ -289,6 +289,8 @@ void Run::execute() {
   result_.dut_description = dut_.description();
   t0_ = Clock::now();
   handshake(initial, 0);
+  if (!config_.console_opening.empty()) notes_.emplace_back(link::kNoFrame, config_.console_opening);
+  opened_ = true;
   auto last_progress = Clock::now();
   app::GrayImage image;
   const bool soak = config_.loops > 1;
@@ -313,6 +315,7 @@ void Run::execute() {
         result_.frames[k].fate = Fate::kNotSent;
         result_.frames[k].reason = "the DUT was busy at the frame's time";
         if (config_.on_resolved) config_.on_resolved(result_.frames[k]);
+        if (config_.console_frame_line) notes_.emplace_back(k, config_.console_frame_line(result_.frames[k]));
         continue;
       }
     } else {
@@ -321,6 +324,7 @@ void Run::execute() {
     next_frame_ = k;
     if (fault != nullptr && is_rig_fault(fault->kind)) inject(k, *fault);
     next_frame_ = k;
+    send_notes();
     send_frame(k, image, fault);
     images_[k] = std::move(image);
     image = app::GrayImage{};
@@ -343,6 +347,7 @@ void Run::execute() {
       if (is_rig_fault(f.kind) && !f.answered && result_.frames[f.frame].sent_us >= 0) return false;
     return true;
   });
+  send_notes();
   if (soak) sample_soak(total);
   // The DUT's counters, then goodbye; neither is worth waiting long for.
   send(encode(MessageType::kStats, {}));
@@ -366,10 +371,11 @@ RunResult run_hil(const RunConfig& config, DutDriver& dut) {
     result.error = a.why;
   }
   run.judge_faults();
-  dut.stop();
   for (const FrameRecord& r : result.frames)
     if (r.fate == Fate::kPending && r.sent_us >= 0) ++result.unaccounted;
   for (const FrameRecord& r : result.frames) result.wire_bytes += r.wire_bytes;
+  if (config.console_closing) run.send_closing_notes(config.console_closing(result));
+  dut.stop();
   result.seconds = std::chrono::duration<double>(Clock::now() - start).count();
   return result;
 }

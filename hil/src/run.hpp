@@ -95,6 +95,9 @@ class Run {
 
   void execute();
   void judge_faults();
+  // The console's closing lines (RunConfig::console_closing), best effort:
+  // the report says everything anyway.
+  void send_closing_notes(const std::vector<std::string>& lines);
 
  private:
   Transport& wire() { return dut_.transport(); }
@@ -113,6 +116,7 @@ class Run {
   void inject(std::uint32_t index, const PlannedFault& fault);
   void restart_reported();
   void sample_soak(std::uint32_t frames_sent);
+  void send_notes();  // the console lines queued since the last call
   double since_start_us() const { return std::chrono::duration<double, std::micro>(Clock::now() - t0_).count(); }
 
   const RunConfig& config_;
@@ -123,6 +127,8 @@ class Run {
   app::Rng rng_;
   Clock::time_point t0_ = Clock::now();
   std::optional<Reference> reference_;
+  std::vector<std::pair<std::uint32_t, std::string>> notes_;  // frame (kNoFrame: the run), console line
+  bool opened_ = false;  // the console's opening line is queued (the handshake succeeded)
   link::Caps caps_;
   bool awaiting_caps_ = false;
   std::uint32_t run_id_ = 0;

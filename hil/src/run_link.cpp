@@ -53,6 +53,33 @@ void Run::resolve(std::uint32_t frame, Fate fate, const std::string& reason, con
   }
   images_.erase(frame);
   if (config_.on_resolved) config_.on_resolved(r);
+  if (config_.console_frame_line) notes_.emplace_back(frame, config_.console_frame_line(r));
+}
+
+void Run::send_notes() {
+  for (const auto& [frame, text] : notes_) {
+    link::Note note;
+    note.frame_id = frame;
+    link::set_text(note.text, text.c_str());
+    std::byte b[link::kNoteBytes];
+    send(encode(MessageType::kNote, std::span(b, link::encode(note, b))));
+  }
+  notes_.clear();
+}
+
+void Run::send_closing_notes(const std::vector<std::string>& lines) {
+  // The opening line first if the run never got as far (a DUT that refused
+  // the run): a farm then reads a complete verdict, its checks failed.
+  if (!opened_ && !config_.console_opening.empty()) notes_.emplace_back(link::kNoFrame, config_.console_opening);
+  for (const std::string& line : lines) notes_.emplace_back(link::kNoFrame, line);
+  try {
+    send_notes();
+  } catch (const std::exception&) {
+    // No link left (a DUT that could not be started again): its console
+    // shows no end, and a farm watching for one times out, as it must for a
+    // board that stopped answering. The report has the verdicts.
+    notes_.clear();
+  }
 }
 
 void Run::handle(const std::vector<std::byte>& message) {

@@ -1,7 +1,9 @@
 // The HIL firmware: a device under test for `gabarit hil run --dut cortex-m`.
 // It validates the table in its flash slot once (which the harness fills
 // before reset), then serves the HIL link on UART0 (COBS-framed,
-// docs/hil-protocol.md): frames in, the firmware's session
+// docs/hil-protocol.md), and prints on UART1, its console, a line at boot and
+// the host's NOTEs (a board farm reads its verdicts there: docs/hil-farm.md).
+// Frames in, the firmware's session
 // (firmware_session.hpp: gabarit track's defaults less the search's shared
 // features, the static twin of app::HostedSession), poses out. Timestamps count SysTick at the core
 // clock; under QEMU -icount that is guest time.
@@ -136,9 +138,16 @@ class UartOutput {
 class FirmwareDut {
  public:
   // `table` is `view` when it opened, else null (and `view` is never used).
-  FirmwareDut(const TableView& view, const TableView* table, Timer& timer) noexcept
-      : table_(table), timer_(timer), session_(view, table != nullptr ? std::span(g_stack_views) : std::span<ImageView>()) {}
+  FirmwareDut(const TableView& view, const TableView* table, Timer& timer, mcu::Uart& console) noexcept
+      : table_(table), timer_(timer), console_(console),
+        session_(view, table != nullptr ? std::span(g_stack_views) : std::span<ImageView>()) {}
   std::uint32_t mode() const noexcept { return session_.mode(); }
+
+  // The host's line for the console (printable ASCII: the endpoint checked).
+  void note(const link::Note& note) noexcept {
+    console_.write(note.text);
+    console_.write("\r\n");
+  }
 
   link::Refusal start(const link::Hello& hello) noexcept {
     if (table_ == nullptr) return link::Refusal::kNoTable;
@@ -171,6 +180,7 @@ class FirmwareDut {
  private:
   const TableView* table_;
   Timer& timer_;
+  mcu::Uart& console_;
   HilSession session_;
 };
 
@@ -198,7 +208,12 @@ extern "C" int app_main() {
   TableView view;
   link::DeviceDescription device;
   const TableView* table = open_slot_table(view, device.table_bytes, device.table_crc);
-  FirmwareDut app(view, table, timer);
+  mcu::Uart console(mcu::board::kUart1Base);
+  console.enable_tx();
+  console.write("gabarit-hil: ready, ");
+  console.write(mcu::board::kName);
+  console.write(table != nullptr ? ", a table in the slot\r\n" : ", no valid table in the slot\r\n");
+  FirmwareDut app(view, table, timer, console);
   device.max_payload = static_cast<std::uint16_t>(kMaxPayload);
   device.clock_hz = mcu::board::kCoreClockHz;
   device.max_frame_bytes = kMaxFrameBytes;

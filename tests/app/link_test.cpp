@@ -3,6 +3,7 @@
 
 #include <cstring>
 #include <random>
+#include <string>
 #include <vector>
 
 #include "gabarit/crc32.hpp"
@@ -289,7 +290,9 @@ struct App {
     return Refusal::kNone;
   }
   std::uint64_t now() noexcept { return ++clock; }
+  void note(const Note& n) noexcept { notes.emplace_back(n.text); }
   Hello started;
+  std::vector<std::string> notes;  // a console's lines
   int starts = 0;
   std::uint64_t clock = 0;
 };
@@ -497,6 +500,48 @@ TEST_F(EndpointFixture, AnInjectIsAnsweredUnsupportedByADutWithoutARigAndTheRigC
   ASSERT_EQ(events.size(), 1u);
   EXPECT_EQ(events[0].kind, EventKind::kRestart);
   EXPECT_EQ(events[0].frame_id, kNoFrame);
+}
+
+TEST(Protocol, ANoteRoundTripsAndOnlyPrintableTextDecodes) {
+  Note n;
+  n.frame_id = 12;
+  set_text(n.text, "gabarit-hil case=frame-000012 result=pass");
+  std::byte b[kNoteBytes];
+  ASSERT_EQ(encode(n, b), kNoteBytes);
+  Note back;
+  ASSERT_EQ(decode(std::span<const std::byte>(b, kNoteBytes), back), Status::kOk);
+  EXPECT_EQ(back.frame_id, 12u);
+  EXPECT_STREQ(back.text, n.text);
+  EXPECT_EQ(decode(std::span<const std::byte>(b, kNoteBytes - 1), back), Status::kTruncated);
+  // A console must never be sent control bytes: not in the text, nor after its end.
+  b[4 + 3] = std::byte{'\r'};
+  EXPECT_EQ(decode(std::span<const std::byte>(b, kNoteBytes), back), Status::kBadHeaderField);
+  b[4 + 3] = std::byte{'i'};
+  b[kNoteBytes - 5] = std::byte{'x'};  // text after the padding began
+  EXPECT_EQ(decode(std::span<const std::byte>(b, kNoteBytes), back), Status::kBadHeaderField);
+  b[kNoteBytes - 5] = std::byte{0};
+  b[4 + 5] = std::byte{0x80};
+  EXPECT_EQ(decode(std::span<const std::byte>(b, kNoteBytes), back), Status::kBadHeaderField);
+}
+
+TEST_F(EndpointFixture, ANoteReachesTheApplicationsConsoleAndIsNeverAnswered) {
+  hello(1);
+  take();
+  Note n;
+  set_text(n.text, "gabarit-hil: frames");
+  std::byte b[kNoteBytes];
+  deliver(MessageType::kNote, std::span(b, encode(n, b)));
+  set_text(n.text, "gabarit-hil: run over");
+  deliver(MessageType::kNote, std::span(b, encode(n, b)));
+  EXPECT_TRUE(out.sent.empty());
+  EXPECT_EQ(app.notes, (std::vector<std::string>{"gabarit-hil: frames", "gabarit-hil: run over"}));
+  const std::size_t bytes = encode(n, b);
+  b[4] = std::byte{0x07};  // a bell: refused and counted, never printed
+  deliver(MessageType::kNote, std::span(b, bytes));
+  EXPECT_EQ(app.notes.size(), 2u);
+  Note none;
+  EXPECT_FALSE(endpoint.take_note(none));
+  EXPECT_EQ(endpoint.stats().bad_message, 1u);
 }
 
 }  // namespace

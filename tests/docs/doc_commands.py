@@ -39,6 +39,11 @@ ELSEWHERE = [
     (r"^cmake --workflow --preset release && cmake --workflow --preset aarch64\b", "CI's release and aarch64 presets (tools/scripts/test-all.sh)"),
     (r"hil run --dut virtual-board --sequence seq --report report --faults cycle:6:", "hil.virtual_board (aarch64 preset, tests/hil/virtual_board_hil.sh)"),
     (r"hil run --dut virtual-board --sequence seq --report soak --soak 50\b", "the hil-soak-virtual-board target (about 90 minutes)"),
+    (r"hil lava-job --sequence seq --firmware build/cortex-m7/", "hil.lava.mps2-an500 (cortex-m7 preset, tests/hil/lava_run_test.sh)"),
+    (r"^apt-get install --no-install-recommends lava-dispatcher python3-jinja2$", "CI's setup (tools/scripts/setup-debian.sh)"),
+    (r"^printf \"\{%% extends 'gabarit-qemu-", "hil.lava.mps2-an500 (cortex-m7 preset, tests/hil/lava_run_test.sh)"),
+    (r"^python3 hil/lava/render_device\.py ", "hil.lava.mps2-an500 (cortex-m7 preset, tests/hil/lava_run_test.sh)"),
+    (r"^lava-run --job-id ", "hil.lava.mps2-an500 (cortex-m7 preset, tests/hil/lava_run_test.sh)"),
 ]
 
 # Commands that take minutes: run by the docs-commands-long target only.

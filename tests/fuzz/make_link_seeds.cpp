@@ -70,6 +70,12 @@ int main(int argc, char** argv) {
     set_text(answer.evidence, "a rig's answer, which a device never receives");
     put(run, MessageType::kInjected, std::span(big, encode(answer, big)));
   }
+  {
+    std::byte note[kNoteBytes];
+    Note line;
+    set_text(line.text, "gabarit-hil case=frame-000001 result=pass measurement=0.010 units=px");
+    put(run, MessageType::kNote, std::span(note, encode(line, note)));
+  }
   put(run, MessageType::kBye, std::span(b, encode(Bye{0, 1}, b)));
   write(dir + "/run.bin", run);
   std::vector<std::byte> faults;

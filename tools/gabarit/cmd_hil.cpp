@@ -12,6 +12,7 @@
 #include "gabarit/app/image_io.hpp"
 #include "gabarit/app/session_profile_io.hpp"
 #include "gabarit/hil/board_map.hpp"
+#include "gabarit/hil/console_verdicts.hpp"
 #include "gabarit/hil/dut.hpp"
 #include "gabarit/hil/harness.hpp"
 #include "gabarit/hil/report.hpp"
@@ -98,7 +99,9 @@ app::Args declare_hil_run() {
        {"--clock-mhz", "F", "verilator: the voter's clock for times (default 48: the UP5K's lowest Fmax over seeds)"},
        {"--virtual-board", "DIR", "virtual-board: the aarch64 build (default: build/aarch64 beside this build), with\n"
                                   "                          gabarit-board, gabarit-hil-relay and virtual-board/cache (prepare.sh)"},
-       {"--timeout", "MS", "declare the DUT hung after this long without an answer to a PING (default per DUT)"}});
+       {"--timeout", "MS", "declare the DUT hung after this long without an answer to a PING (default per DUT)"},
+       {"--console-verdicts", "", "send each frame's verdict, then the checks, to the DUT's console as NOTEs (a board\n"
+                                  "                          farm that reads the console makes test cases of them; docs/hil-farm.md)"}});
 }
 
 // The device under test `--dut KIND` names, with its options.
@@ -194,8 +197,10 @@ int summarise(const hil::RunResult& result, const std::string& report) {
 }  // namespace
 
 int hil(const std::vector<std::string>& argv) {
+  if (!argv.empty() && (argv[0] == "lava-job" || argv[0] == "lava-replay"))
+    return hil_lava(argv[0], std::vector<std::string>(argv.begin() + 1, argv.end()));
   if (argv.empty() || (argv[0] != "run" && argv[0] != "--help" && argv[0] != "-h"))
-    throw app::UsageError("hil: want 'run' (gabarit hil run --help)");
+    throw app::UsageError("hil: want 'run', 'lava-job' or 'lava-replay' (gabarit hil run --help)");
   const std::vector<std::string> rest(argv.begin() + (argv[0] == "run" ? 1 : 0), argv.end());
   app::Args args = declare_hil_run();
   if (!args.parse(rest)) return 0;
@@ -261,6 +266,8 @@ int hil(const std::vector<std::string>& argv) {
     if (tty && done == total) std::fputc('\n', stderr);
   };
   const std::vector<app::PoseSample> truth = read_truth(sequence, config);
+  const hil::ConsoleVerdicts verdicts(truth);
+  if (args.has("--console-verdicts")) verdicts.attach(config);
   const hil::RunResult result = hil::run_hil(config, *dut);
   jsonl.commit();
   hil::write_report(report, config, result, truth);

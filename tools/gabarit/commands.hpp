@@ -17,5 +17,7 @@ int track(const std::vector<std::string>& args);
 int eval(const std::vector<std::string>& args);
 int vectors(const std::vector<std::string>& args);
 int hil(const std::vector<std::string>& args);
+// gabarit hil lava-job | lava-replay (cmd_hil_lava.cpp)
+int hil_lava(const std::string& verb, const std::vector<std::string>& args);
 
 }  // namespace gabarit::cli

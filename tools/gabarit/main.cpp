@@ -29,6 +29,7 @@ constexpr const char* kUsage =
     "  eval             compare tracked poses with ground truth\n"
     "  vectors          write the cross-target test vectors (table, frames, expected results)\n"
     "  hil run          replay a sequence into a device under test, check and report (HIL)\n"
+    "  hil lava-job     write a LAVA job that runs the HIL on a board farm (docs/hil-farm.md)\n"
     "  bench            re-measure the thesis's synthetic experiments (runs gabarit-bench)\n";
 
 // `gabarit bench` runs gabarit-bench from this executable's directory: the

@@ -19,6 +19,7 @@ packages=(
   yosys nextpnr-ice40 fpga-icestorm  # hardware voter synthesis and place-and-route
   z3                      # the SMT solver behind yosys-smtbmc (formal proof of the FIFO)
   clang-14 libfuzzer-14-dev libclang-rt-14-dev  # the fuzz preset: libFuzzer targets, clang's UBSan (float-cast-overflow)
+  lava-dispatcher python3-jinja2  # hil.lava.*: gabarit hil lava-job's jobs under LAVA's dispatcher (lava-run)
 )
 # The board application's libgpiod for the cross targets, and the arm64
 # relay's libusb, from Debian's multi-arch packages.

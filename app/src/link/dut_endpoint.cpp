@@ -153,6 +153,16 @@ void DutEndpoint::on_message(std::span<const std::byte> message, std::uint64_t n
       inject_pending_ = true;
       return;
     }
+    case MessageType::kNote: {
+      Note note;
+      if (decode(payload, note) != Status::kOk) {
+        ++stats_.bad_message;
+        return;
+      }
+      note_ = note;
+      note_pending_ = true;
+      return;
+    }
     case MessageType::kCaps:
     case MessageType::kPose:
     case MessageType::kEvent:
@@ -161,6 +171,13 @@ void DutEndpoint::on_message(std::span<const std::byte> message, std::uint64_t n
       break;  // the device's own messages: not for it
   }
   ++stats_.unknown_type;
+}
+
+bool DutEndpoint::take_note(Note& note) noexcept {
+  if (!note_pending_) return false;
+  note = note_;
+  note_pending_ = false;
+  return true;
 }
 
 bool DutEndpoint::take_inject(Inject& inject) noexcept {

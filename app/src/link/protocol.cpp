@@ -114,6 +114,7 @@ const char* message_type_name(MessageType type) noexcept {
     case MessageType::kBye: return "bye";
     case MessageType::kInject: return "inject";
     case MessageType::kInjected: return "injected";
+    case MessageType::kNote: return "note";
   }
   return "unknown";
 }
@@ -525,6 +526,27 @@ Status decode(std::span<const std::byte> payload, Injected& m) noexcept {
   GABARIT_TRY(r.status());
   if (outcome > 3) return Status::kBadHeaderField;
   m.outcome = static_cast<InjectOutcome>(outcome);
+  return Status::kOk;
+}
+
+std::size_t encode(const Note& m, std::span<std::byte> out) noexcept {
+  Writer w(out);
+  w.u32(m.frame_id);
+  for (const char c : m.text) w.u8(static_cast<std::uint8_t>(c));
+  return w.done();
+}
+
+Status decode(std::span<const std::byte> payload, Note& m) noexcept {
+  Reader r(payload);
+  m.frame_id = r.u32();
+  r.text(m.text);
+  GABARIT_TRY(r.status());
+  // Text, then only padding: a console must never be sent control bytes.
+  bool padding = false;
+  for (const char c : m.text) {
+    if (c == '\0') padding = true;
+    else if (padding || c < ' ' || c > '~') return Status::kBadHeaderField;
+  }
   return Status::kOk;
 }
 

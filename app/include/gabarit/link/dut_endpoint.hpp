@@ -85,6 +85,10 @@ class DutEndpoint {
   const Inject* pending_inject() const noexcept { return inject_pending_ ? &inject_ : nullptr; }
   bool take_inject(Inject& inject) noexcept;
   void report_injected(const Injected& answer) noexcept;
+  // A NOTE for the DUT's console (its text is printable ASCII): a DUT with a
+  // console prints it (deliver() calls app.note where the application has
+  // one); the rest ignore it.
+  bool take_note(Note& note) noexcept;
   // A DUT event with no frame (kNoFrame): a rig's DUT restarted behind it
   // (kRestart, kBoot), which the host answers with a new HELLO.
   void report_event(EventKind kind, EventReason reason, std::uint32_t detail, std::uint64_t now) noexcept;
@@ -147,6 +151,8 @@ class DutEndpoint {
   bool hello_pending_ = false;
   Inject inject_;
   bool inject_pending_ = false;
+  Note note_;
+  bool note_pending_ = false;
   std::byte outbox_[kOutboxMessages][message_bytes(kMinPayload)] = {};
   std::uint16_t outbox_size_[kOutboxMessages] = {};
   std::uint32_t outbox_head_ = 0, outbox_count_ = 0;
@@ -173,6 +179,9 @@ void deliver(DutEndpoint& endpoint, std::span<const std::byte> message, Applicat
     answer.token = inject.token;
     answer.kind = inject.kind;
     endpoint.report_injected(answer);
+  }
+  if (Note note; endpoint.take_note(note)) {
+    if constexpr (requires { app.note(note); }) app.note(note);
   }
   flush(endpoint, out);
 }

@@ -50,6 +50,7 @@ enum class MessageType : std::uint8_t {
   kBye = 9,    // host -> DUT: end of run; DUT -> host: the acknowledgement
   kInject = 10,    // host -> DUT: inject a fault on the DUT's side (a test rig's DUT: the virtual board)
   kInjected = 11,  // DUT -> host: that fault's outcome and evidence
+  kNote = 12,      // host -> DUT: a line for the DUT's console (a lab that reads the console sees the host's verdicts)
 };
 const char* message_type_name(MessageType type) noexcept;  // "hello", ..., "unknown"
 
@@ -318,6 +319,17 @@ struct Injected {
 };
 inline constexpr std::size_t kInjectedBytes = 24 + 80;
 
+// NOTE: a line of text from the host for the DUT's own console, where it has
+// one (the Cortex-M firmware prints it on UART1). A board farm that reads only
+// the console (LAVA's monitors) learns the harness's verdicts this way
+// (docs/hil-farm.md). Printable ASCII, NUL-padded; no answer. A DUT without a
+// console ignores it.
+struct Note {
+  std::uint32_t frame_id = kNoFrame;  // the frame it is about (kNoFrame: the run)
+  char text[96] = {};
+};
+inline constexpr std::size_t kNoteBytes = 4 + 96;
+
 std::size_t encode(const Hello& m, std::span<std::byte> out) noexcept;
 std::size_t encode(const Caps& m, std::span<std::byte> out) noexcept;
 std::size_t encode(const FrameFragment& m, std::span<std::byte> out) noexcept;  // header fields and pixels
@@ -329,6 +341,7 @@ std::size_t encode(const Stats& m, std::span<std::byte> out) noexcept;
 std::size_t encode(const Bye& m, std::span<std::byte> out) noexcept;
 std::size_t encode(const Inject& m, std::span<std::byte> out) noexcept;
 std::size_t encode(const Injected& m, std::span<std::byte> out) noexcept;
+std::size_t encode(const Note& m, std::span<std::byte> out) noexcept;
 
 Status decode(std::span<const std::byte> payload, Hello& m) noexcept;
 Status decode(std::span<const std::byte> payload, Caps& m) noexcept;
@@ -341,6 +354,7 @@ Status decode(std::span<const std::byte> payload, Stats& m) noexcept;
 Status decode(std::span<const std::byte> payload, Bye& m) noexcept;
 Status decode(std::span<const std::byte> payload, Inject& m) noexcept;
 Status decode(std::span<const std::byte> payload, Injected& m) noexcept;
+Status decode(std::span<const std::byte> payload, Note& m) noexcept;  // kBadHeaderField: not printable ASCII
 
 // Copies a NUL-terminated string into a fixed field, truncating, NUL-padding.
 template <std::size_t N>

@@ -80,6 +80,8 @@ struct SoakSample {
   double latency_p50_us = 0, latency_p99_us = 0;  // over the window's poses
 };
 
+struct RunResult;
+
 struct RunConfig {
   std::string sequence_dir;            // frames.y4m (and gt.csv)
   std::string table_path;              // the host's copy of the DUT's table
@@ -98,6 +100,12 @@ struct RunConfig {
   std::function<void(std::uint32_t, std::uint32_t)> progress;
   // Called as each frame's fate becomes known (results.jsonl).
   std::function<void(const FrameRecord&)> on_resolved;
+  // Lines for the DUT's console, each sent as a NOTE (console_verdicts.hpp):
+  // the opening one after the first handshake, a frame's as its fate becomes
+  // known, the closing ones once the run is judged. Empty or unset: none.
+  std::string console_opening;
+  std::function<std::string(const FrameRecord&)> console_frame_line;
+  std::function<std::vector<std::string>(const RunResult&)> console_closing;
 };
 
 struct LatencySummary {

@@ -8,6 +8,7 @@
 namespace gabarit::mcu::board {
 inline constexpr const char* kName = "mps3-an547 (Cortex-M55)";
 inline constexpr std::uintptr_t kUart0Base = 0x59303000;  // CMSDK APB UART0, Secure alias
+inline constexpr std::uintptr_t kUart1Base = 0x59304000;  // CMSDK APB UART1, Secure alias: the HIL firmware's console
 // The core clock SysTick counts (QEMU's SYSCLK for the board).
 inline constexpr std::uint32_t kCoreClockHz = 32000000;
 }  // namespace gabarit::mcu::board
