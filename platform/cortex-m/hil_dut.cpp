@@ -51,6 +51,16 @@ constexpr std::uint32_t kMaxFrameBytes = 384u * 288u;
 constexpr std::size_t kMaxPayload = 1024;
 constexpr std::size_t kMaxStackDepths = 16;
 
+// A test double, never a product image: built with GABARIT_HIL_FAULTY_FRAME=N
+// (gabarit-firmware-hil-faulty) it reports frame N's pose a pixel to the
+// right, as a firmware bug would, so that the path of a failing frame through
+// a board farm can be tested (tests/hil/lava_run_test.sh, lava_farm_test.sh).
+// 0, no frame, in every other image.
+#ifndef GABARIT_HIL_FAULTY_FRAME
+#define GABARIT_HIL_FAULTY_FRAME 0
+#endif
+constexpr std::uint32_t kFaultyFrame = GABARIT_HIL_FAULTY_FRAME;
+
 RoiPoint g_features[mcu::kFeatureCapacity];
 VoteCounter g_counters[mcu::kCounterCount];
 std::uint8_t g_roi_mask[mcu::kMaskBytes];
@@ -173,7 +183,9 @@ class FirmwareDut {
       endpoint.report_failure(link::EventKind::kError, link::EventReason::kTracking, static_cast<std::uint32_t>(s), now());
       return true;
     }
-    endpoint.report_pose(link::session_report(result), now());
+    link::PoseReport report = link::session_report(result);
+    if (kFaultyFrame != 0 && frame.frame_id == kFaultyFrame) report.pose.x += 1.0f;
+    endpoint.report_pose(report, now());
     return true;
   }
 

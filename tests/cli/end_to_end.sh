@@ -292,6 +292,17 @@ cmp -s "$s/pa.csv" "$s/pf2.csv" || fail "--profile of a saved particle profile d
 $g hil run --dut inprocess --profile "$s/pf.profile" --sequence "$s" --table "$s/t.gbt" --frames 12 --report "$s/pf-hil" 2>/dev/null \
   || fail "hil run --profile (particle tracker)"
 grep -q '"poses_matching_reference": 12' "$s/pf-hil/summary.json" || fail "hil run, particle tracker: $(head -c 400 "$s/pf-hil/summary.json")"
+# The LAVA job writer and replayer (docs/hil-farm.md): a board of its own
+# takes no firmware, a QEMU board wants one; a used folder, a replay with no
+# link or with two, or a missing hardware map is refused.
+expect 2 "takes no --firmware" $g hil lava-job --sequence "$s" --table "$s/t.gbt" --device-type gabarit-board --firmware "$g" --out "$work/lava-a"
+expect 2 "wants --firmware" $g hil lava-job --sequence "$s" --table "$s/t.gbt" --out "$work/lava-a"
+$g hil lava-job --sequence "$s" --table "$s/t.gbt" --device-type gabarit-board --out "$work/lava-b" > /dev/null || fail "hil lava-job --device-type gabarit-board"
+grep -q "method: minimal" "$work/lava-b/job.yaml" && [ ! -e "$work/lava-b/firmware.elf" ] || fail "a gabarit-board job: $(cat "$work/lava-b/job.yaml")"
+expect 2 "not an empty folder" $g hil lava-job --sequence "$s" --table "$s/t.gbt" --device-type gabarit-board --out "$work/lava-b"
+expect 2 "one of --link" $g hil lava-replay --bundle "$work/lava-b" --foreground
+expect 2 "one of --link" $g hil lava-replay --bundle "$work/lava-b" --link 127.0.0.1:1 --board "$work/lava-b/job.yaml" --foreground
+expect 2 "no such file" $g hil lava-replay --bundle "$work/lava-b" --board "$work/none.yaml" --foreground
 expect 2 "applies to the stencil tracker" $g track --tracker particle --no-verify --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init"
 expect 2 "--measure applies to --tracker particle" $g track --measure edges --table "$s/t.gbt" --frames "$s/frames.y4m" --init "$init"
 expect 2 "applies to --scene" $g synth --shape curve --depths 3 -o "$work/x"

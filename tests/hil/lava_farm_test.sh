@@ -2,20 +2,33 @@
 # One machine standing in for a LAVA farm (docs/hil-farm.md): a local LAVA
 # server (PostgreSQL, the web API under gunicorn, the scheduler) and two
 # workers, each with two QEMU mps2-an500 boards of gabarit's device type,
-# all started and stopped here, as root, without systemd. Four jobs from
-# `gabarit hil lava-job` are submitted with lavacli: three pass, and the
-# fourth's firmware finds no table (its handshake case fails). Checked:
-#   - the four ran at once (each started before any ended), on four boards
-#     of two workers;
-#   - farm_report.py merges their JUnit from the server's API into one report
-#     that names the failing board, job and case, and nothing else failed;
+# all started and stopped here, as root, without systemd. Five jobs from
+# `gabarit hil lava-job` are submitted with lavacli: four of the same
+# firmware, and a fifth whose firmware has a bug on one frame (FAULTY_ELF:
+# frame 5's pose a pixel off). With an aarch64 build (AARCH64_BUILD, its
+# gabarit-board and gabarit-hil-relay), worker2 also has the virtual board as
+# a device of type gabarit-board, and a sixth job runs on it. Checked:
+#   - the first four ran at once (each started before any ended), on four
+#     boards of two workers, and every pose of theirs is bit-identical to the
+#     host's (their harness reports, collected by farm_report.py --collect);
+#   - the sixth (if any) ran on the virtual board, every pose identical;
+#   - all complete; farm_report.py merges their JUnit from the server's
+#     API into one report that names the fifth job's board, the failing frame
+#     and the failed pose check, and nothing else failed;
 #   - the first job's file, run again by lava-run alone, gives the same
 #     verdicts as through the server.
-# Usage: lava_farm_test.sh GABARIT FIRMWARE_ELF SOURCE_DIR
+# Usage: lava_farm_test.sh GABARIT FIRMWARE_ELF FAULTY_ELF SOURCE_DIR [AARCH64_BUILD]
 # Exit 77 (skipped) without lava-server, lava-dispatcher, lavacli,
 # PostgreSQL 15 or root. The `hil-lava-farm` target of a cortex-m7 build runs it.
 set -euo pipefail
-gabarit=$1 firmware=$2 source=$3
+gabarit=$1 firmware=$2 faulty=$3 source=$4 aarch64=${5:-}
+vb=$source/platform/linux/virtual-board
+if [ -n "$aarch64" ] && [ -x "$aarch64/platform/linux/gabarit-board" ] && [ -x "$aarch64/platform/linux/gabarit-hil-relay" ]; then
+  bash "$vb/prepare.sh" "$aarch64/virtual-board/cache" > /dev/null
+else
+  echo "(no aarch64 build at '${aarch64}': the virtual board is not in this farm)"
+  aarch64=""
+fi
 templates=$source/hil/lava
 for tool in lava-server lava-worker lava-run lavacli gunicorn3 pg_ctlcluster runuser; do
   command -v $tool > /dev/null || { echo "SKIP: no $tool (apt-get install lava-server lava-dispatcher lavacli postgresql)"; exit 77; }
@@ -26,6 +39,7 @@ db=gabarit_farm_$$
 pids=() started_postgres=0
 as_postgres() { (cd / && runuser -u postgres -- psql -qc "$1"); }
 cleanup() {
+  [ -z "$aarch64" ] || bash "$templates/virtual-board-power.sh" off "$work/vb1" || true
   for pid in "${pids[@]}"; do kill -- -"$pid" 2> /dev/null || kill "$pid" 2> /dev/null || true; done
   as_postgres "DROP DATABASE IF EXISTS $db" > /dev/null 2>&1 || true
   as_postgres "DROP ROLE IF EXISTS $db" > /dev/null 2>&1 || true
@@ -61,6 +75,25 @@ for w in worker1 worker2; do
     lava-server manage devices add --device-type gabarit-qemu-mps2-an500 --worker $w $w-board$b
   done
 done
+if [ -n "$aarch64" ]; then
+  # The virtual board as a lab's board (docs/hil-farm.md): its power by a
+  # script, its console on a TCP port, its relay as its hardware map says.
+  relay_port=$(free_port) console_port=$(free_port)
+  sed "s/^relay: .*/relay: tcp:127.0.0.1:$relay_port/" "$source/hil/boards/virtual-board-tcp.yaml" > vb1.yaml
+  power="bash $templates/virtual-board-power.sh"
+  serve="bash $vb/serve.sh --cache $aarch64/virtual-board/cache --board $aarch64/platform/linux/gabarit-board --relay $aarch64/platform/linux/gabarit-hil-relay --port $relay_port --console-port $console_port --log $work/vb1/qemu.log"
+  cat > devices/worker2-vb1.jinja2 <<DICT
+{% extends 'gabarit-board.jinja2' %}
+{% set gabarit = '$gabarit' %}
+{% set gabarit_board = '$work/vb1.yaml' %}
+{% set connection_command = 'bash $templates/virtual-board-console.sh $console_port' %}
+{% set power_on_command = '$power on $work/vb1 -- $serve --bundle ' ~ gabarit_bundle %}
+{% set hard_reset_command = power_on_command %}
+{% set power_off_command = '$power off $work/vb1' %}
+DICT
+  lava-server manage device-types add gabarit-board
+  lava-server manage devices add --device-type gabarit-board --worker worker2 worker2-vb1
+fi
 
 echo "--- the server, the scheduler and two workers"
 port=$(free_port)
@@ -75,52 +108,64 @@ for w in worker1 worker2; do
     --worker-dir "$work/$w" --log-file "$work/$w.log" --level INFO
 done
 
-echo "--- four jobs"
+echo "--- five jobs${aarch64:+, and a sixth on the virtual board}"
 "$gabarit" synth --shape curve --frames 16 --noise 0.02 --size 96x96 --seed 11 -o seq > /dev/null
 "$gabarit" tables build --model seq/model.pgm --binary --x -4:4:9 --y -4:4:9 -o seq/table.gbt > /dev/null
 for i in 1 2 3 4; do
   "$gabarit" hil lava-job --sequence seq --firmware "$firmware" --name seq-$i --minutes 5 --out job$i > /dev/null
 done
-# The fourth board's firmware finds no table: it lands 64 KiB past the slot.
-slot=$(nm "$firmware" | awk '$3 == "gabarit_table_slot" { print $1 }')
-sed -i "s/,addr=0x[0-9a-f]*,force-raw/,addr=$(printf '0x%08x' $((0x$slot + 0x10000))),force-raw/" job4/job.yaml
+"$gabarit" hil lava-job --sequence seq --firmware "$faulty" --name seq-faulty --minutes 5 --out job5 > /dev/null
+jobs=(1 2 3 4 5)
+if [ -n "$aarch64" ]; then
+  "$gabarit" hil lava-job --sequence seq --device-type gabarit-board --name seq-vb --minutes 5 --out job6 > /dev/null
+  jobs+=(6)
+fi
 lava="lavacli --uri http://admin:$token@127.0.0.1:$port/RPC2"
 ids=()
 start=$SECONDS
-for i in 1 2 3 4; do ids+=("$($lava jobs submit job$i/job.yaml)"); done
+for i in "${jobs[@]}"; do ids+=("$($lava jobs submit job$i/job.yaml)"); done
 for id in "${ids[@]}"; do
   until $lava jobs show "$id" | grep -q "^state *: Finished"; do
     [ $((SECONDS - start)) -lt 900 ] || { echo "FAIL: job $id did not finish in 900 s"; exit 1; }
     sleep 3
   done
 done
-echo "four jobs done in $((SECONDS - start)) s"
+echo "${#ids[@]} jobs done in $((SECONDS - start)) s"
 
 echo "--- the farm's report"
 status=0
-python3 "$templates/farm_report.py" --url "$url" --token "$token" --out merged-junit.xml "${ids[@]}" > farm-report.txt || true
+python3 "$templates/farm_report.py" --url "$url" --token "$token" --out merged-junit.xml --collect reports "${ids[@]}" > farm-report.txt || true
 cat farm-report.txt
 python3 - "$url" "$token" farm-report.txt "${ids[@]}" <<'PY' || status=1
-import json, sys, urllib.request
+import json, pathlib, sys, urllib.request
 url, token, report, ids = sys.argv[1], sys.argv[2], open(sys.argv[3]).read(), sys.argv[4:]
 def get(path):
     r = urllib.request.Request(url + path, headers={"Authorization": f"Token {token}"})
     return json.loads(urllib.request.urlopen(r, timeout=60).read())
 jobs = [get(f"/api/v0.2/jobs/{i}/") for i in ids]
 problems = []
-boards = {j["actual_device"] for j in jobs}
+boards = {j["actual_device"] for j in jobs[:4]}
 if len(boards) != 4 or {b.split("-")[0] for b in boards} != {"worker1", "worker2"}:
     problems.append(f"the jobs ran on {sorted(boards)}, want four boards of two workers")
-if max(j["start_time"] for j in jobs) >= min(j["end_time"] for j in jobs):
-    problems.append("the jobs did not run at once: " + ", ".join(f"{j['start_time']}..{j['end_time']}" for j in jobs))
+if max(j["start_time"] for j in jobs[:4]) >= min(j["end_time"] for j in jobs[:4]):
+    problems.append("the jobs did not run at once: " + ", ".join(f"{j['start_time']}..{j['end_time']}" for j in jobs[:4]))
+if len(jobs) > 5 and jobs[5]["actual_device"] != "worker2-vb1":
+    problems.append(f"the sixth job ran on {jobs[5]['actual_device']}, want worker2-vb1")
+for i, j in list(zip(ids[:4], jobs[:4])) + list(zip(ids[5:], jobs[5:])):
+    summary = pathlib.Path(f"reports/{j['actual_device']}-job{i}/summary.json")
+    s = json.loads(summary.read_text()) if summary.exists() else {}
+    if s.get("poses") != 16 or s.get("poses_matching_reference") != 16:
+        problems.append(f"job {i}: {s.get('poses_matching_reference')} of {s.get('poses')} poses identical to the host's, want 16 of 16")
 if any(j["health"] != "Complete" for j in jobs):
     problems.append("health: " + ", ".join(j["health"] for j in jobs))
-failing_board = jobs[3]["actual_device"]
+failing_board = jobs[4]["actual_device"]
 failed = [l.split() for l in report.splitlines() if l.strip().startswith("FAILED")]
-if not any(f[1] == failing_board and f[3] == f"{ids[3]}:" and f[4] == "gabarit-hil-checks.handshake" for f in failed):
-    problems.append(f"the report does not name {failing_board}, job {ids[3]}, handshake")
-if any(f[1] != failing_board for f in failed):
-    problems.append("a case failed on another board")
+named = {f[4] for f in failed if f[1] == failing_board and f[3] == f"{ids[4]}:"}
+want = {"gabarit-hil-frames.frame_000005", "gabarit-hil-checks.poses_match_reference"}
+if named != want:
+    problems.append(f"the report names {sorted(named)} on {failing_board}, job {ids[4]}; want {sorted(want)}")
+if any(f[1] != failing_board or f[3] != f"{ids[4]}:" for f in failed):
+    problems.append("a case failed in another job")
 for p in problems:
     print("FAIL:", p)
 sys.exit(1 if problems else 0)

@@ -16,6 +16,7 @@ def main() -> int:
     p.add_argument("--skipped", default="", help="the frame cases expected to skip, comma-separated")
     p.add_argument("--checks-pass", action="store_true", help="every check case passes")
     p.add_argument("--failed-check", help="a check case expected to fail (the job still completes)")
+    p.add_argument("--failed-frame", help="the one frame case expected to fail (the job still completes)")
     p.add_argument("--incomplete", metavar="ERROR_TYPE", help="the job is incomplete with this error type")
     p.add_argument("--report-error", help="text the report's error must hold")
     a = p.parse_args()
@@ -50,9 +51,13 @@ def main() -> int:
         want_skips = sorted(s for s in a.skipped.split(",") if s)
         if skips != want_skips:
             problems.append(f"skipped frames {skips}, want {want_skips}")
-        if any(r[0] not in ("pass", "skip") for r in frames.values()):
-            problems.append("a frame failed")
-        if a.frames and (len(errors) != a.frames - len(want_skips) or median > 0.1):
+        failed = sorted(c for c, r in frames.items() if r[0] not in ("pass", "skip"))
+        if failed != ([a.failed_frame] if a.failed_frame else []):
+            problems.append(f"failed frames {failed}, want {a.failed_frame or 'none'}")
+        if a.failed_frame and (frames.get(a.failed_frame, ("", None, ""))[2] != "px"):
+            problems.append(f"the failed frame {a.failed_frame} has no position error: {frames.get(a.failed_frame)}")
+        passed = len(want_skips) + (1 if a.failed_frame else 0)
+        if a.frames and (len(errors) != a.frames - passed or median > 0.1):
             problems.append(f"the frames' errors against gt.csv: {errors}")
         if len(checks) < 8:
             problems.append(f"{len(checks)} check cases")
@@ -69,6 +74,9 @@ def main() -> int:
     print(f"{a.job.name}: lava-run {status}, job {job.get('result')} {job.get('error_type', '')}: {len(frames)} frame cases"
           f" ({len(skips)} skipped, median error {median:.3f} px), {len(checks)} check cases"
           f" ({sum(r != 'pass' for r in checks.values())} failed)")
+    if a.failed_frame and a.failed_frame in frames:
+        result, measurement, units = frames[a.failed_frame]
+        print(f"{a.job.name}: {a.failed_frame} {result}, its error against gt.csv {measurement} {units}")
     for problem in problems:
         print("FAIL:", problem)
     return 1 if problems else 0

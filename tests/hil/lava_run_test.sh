@@ -8,12 +8,15 @@
 #           complete, with the handshake's case failed; a board that never
 #           boots (QEMU refuses its images): incomplete, Infrastructure; a
 #           hung firmware (a reset handler that spins): incomplete, Test
-#           (the monitors time out), and the harness's report says why
-# Usage: lava_run_test.sh GABARIT FIRMWARE_ELF MACHINE HIL_LAVA_DIR [pass|faults]
+#           (the monitors time out), and the harness's report says why; a
+#           firmware with a bug on one frame (FAULTY_ELF, frame 5's pose a
+#           pixel off): complete, with that frame's case failed, its error
+#           against gt.csv as the measurement, and the pose check failed
+# Usage: lava_run_test.sh GABARIT FIRMWARE_ELF MACHINE HIL_LAVA_DIR [pass|faults FAULTY_ELF]
 # Exit 77 (skipped) without lava-run or python3-jinja2, or as a user who
 # cannot write LAVA's folders.
 set -euo pipefail
-gabarit=$1 firmware=$2 machine=$3 templates=$4 scenario=${5:-pass}
+gabarit=$1 firmware=$2 machine=$3 templates=$4 scenario=${5:-pass} faulty=${6:-}
 command -v lava-run > /dev/null || { echo "SKIP: no lava-run (apt-get install lava-dispatcher)"; exit 77; }
 python3 -c "import jinja2, yaml" 2> /dev/null || { echo "SKIP: no python3-jinja2"; exit 77; }
 [ -w /var/lib/lava/dispatcher ] || [ -w /var/lib/lava ] || { echo "SKIP: lava-run needs /var/lib/lava/dispatcher writable (root)"; exit 77; }
@@ -22,7 +25,7 @@ work=$(mktemp -d /tmp/gabarit-lava-XXXXXX)
 trap '[ -n "${KEEP:-}" ] || rm -rf "$work"' EXIT
 cd "$work"
 frames=24
-[ "$scenario" = faults ] && frames=6
+[ "$scenario" = faults ] && frames=8
 "$gabarit" synth --shape curve --frames $frames --noise 0.02 --size 96x96 --seed 11 -o seq > /dev/null
 "$gabarit" tables build --model seq/model.pgm --binary --x -4:4:9 --y -4:4:9 -o seq/table.gbt > /dev/null
 
@@ -73,10 +76,12 @@ else
   arm-none-eabi-gcc -mcpu=cortex-m7 -nostdlib -Wl,--section-start=.vectors=0 -Wl,-Ttext=0x400 \
     -Wl,--defsym=gabarit_table_slot=0x20010000 -Wl,--defsym=gabarit_table_slot_end=0x20020000 hung.S -o hung.elf
   run_job hung hung.elf --minutes 1
-  for job in refused neverboots hung; do launch $job; done
+  run_job faulty "${faulty:?faults wants FAULTY_ELF}" --minutes 2
+  for job in refused neverboots hung faulty; do launch $job; done
   status=0
   python3 "$here/lava_results.py" refused --frames 0 --failed-check handshake || status=1
   python3 "$here/lava_results.py" neverboots --incomplete Infrastructure || status=1
   python3 "$here/lava_results.py" hung --incomplete Test --report-error "did not answer HELLO" || status=1
+  python3 "$here/lava_results.py" faulty --frames $frames --failed-frame frame_000005 --failed-check poses_match_reference || status=1
   exit $status
 fi

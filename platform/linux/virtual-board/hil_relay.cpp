@@ -15,6 +15,8 @@
 // harness asks (INJECT), answering with what detected each (INJECTED).
 //
 // usage: gabarit-hil-relay [options] -- BOARD_PROGRAM [BOARD_ARGS...]
+#include <cstdio>
+
 #include "relay.hpp"
 
 namespace gabarit::relay {
@@ -196,6 +198,12 @@ void Relay::on_harness_message(std::span<const std::byte> m) {
     }
     if (a) endpoint_->report_injected(*a);
   }
+  // The host's line for the board's console (a board farm reads its verdicts
+  // there: docs/hil-farm.md); the relay's output is the board's console.
+  if (link::Note note; endpoint_->take_note(note)) {
+    std::printf("%s\n", note.text);
+    std::fflush(stdout);
+  }
   flush();
 }
 
@@ -273,6 +281,16 @@ int Relay::run() {
       endpoint_->report_failure(link::EventKind::kError, link::EventReason::kCameraTimeout, 0, now_us());
       flush();
     }
+  }
+  // After BYE the harness sends its verdicts for the board's console (a
+  // board farm reads them there): read on until it hangs up or is quiet.
+  const std::uint64_t drain_end = now_us() + 10000000u;
+  for (std::uint64_t quiet_since = now_us(); now_us() < drain_end && now_us() - quiet_since < 2000000u;) {
+    pollfd p{harness_.fd(), POLLIN, 0};
+    if (::poll(&p, 1, 100) <= 0) continue;
+    if ((p.revents & POLLHUP) != 0 && (p.revents & POLLIN) == 0) break;
+    harness_.read_available([&](std::span<const std::byte> m) { on_harness_message(m); }, *endpoint_);
+    quiet_since = now_us();
   }
   log("run over: %llu camera errors, %llu gaps, %llu losses, %llu reopens, %llu wraps seen by the board; %llu board restarts; "
       "%llu resent messages dropped, %llu out of sequence, %llu stale poses, %llu strobes not seen (%llu samples); USB: %llu timeouts, %llu halts "
