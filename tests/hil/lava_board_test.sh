@@ -24,27 +24,12 @@ cd "$work"
 "$gabarit" synth --shape curve --frames 24 --max-step 3 --noise 0.02 --size 160x120 --seed 9 -o seq > /dev/null 2>&1
 "$gabarit" tables build --model seq/model.pgm --binary --x -4:4:9 --y -4:4:9 -o seq/table.gbt > /dev/null 2>&1
 "$gabarit" hil lava-job --sequence seq --device-type gabarit-board --faults cycle:9:camera-error,usb-unplug --minutes 5 --out job
-free_port() { python3 -c 'import socket; s = socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])'; }
-relay_port=$(free_port) console_port=$(free_port)
-# The board's hardware map on the worker: its relay on a TCP port.
-sed "s/^relay: .*/relay: tcp:127.0.0.1:$relay_port/" "$here/../../hil/boards/virtual-board-tcp.yaml" > board.yaml
-# The device dictionary: power on boots the virtual board with the job's
-# table (serve.sh --bundle), as a lab would have provisioned a real one.
-power="bash $templates/virtual-board-power.sh"
-serve="bash $vb/serve.sh --cache $build/virtual-board/cache --board $build/platform/linux/gabarit-board --relay $build/platform/linux/gabarit-hil-relay --port $relay_port --console-port $console_port --log $work/power/qemu.log"
-cat > device.jinja2 <<DICT
-{% extends 'gabarit-board.jinja2' %}
-{% set gabarit = '$gabarit' %}
-{% set gabarit_board = '$work/board.yaml' %}
-{% set connection_command = 'bash $templates/virtual-board-console.sh $console_port' %}
-{% set power_on_command = '$power on $work/power -- $serve --bundle ' ~ gabarit_bundle %}
-{% set hard_reset_command = power_on_command %}
-{% set power_off_command = '$power off $work/power' %}
-DICT
+# The device dictionary and the board's hardware map (its relay on a TCP port).
+bash "$templates/virtual-board-device.sh" "$build" "$work/power" "$gabarit" > device.jinja2
 python3 "$templates/render_device.py" device.jinja2 --context gabarit_bundle="$work/job" > device.yaml
 status=0
 timeout 900 lava-run --job-id "gabarit-board-$$" --output-dir "$work/out" --device device.yaml job/job.yaml > job/lava.log 2>&1 || status=$?
 echo $status > job/status
 for _ in $(seq 100); do [ -f job/report/summary.json ] || [ ! -f job/replay.log ] && break; sleep 0.2; done
 python3 "$here/lava_results.py" job --frames 24 --skipped frame_000009,frame_000018 --checks-pass || {
-  tail -5 job/replay.log; tail -20 power/qemu.log 2> /dev/null; exit 1; }
+  tail -5 job/replay.log; tail -20 power/serve.log power/qemu.log 2> /dev/null; exit 1; }

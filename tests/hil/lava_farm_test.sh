@@ -78,19 +78,7 @@ done
 if [ -n "$aarch64" ]; then
   # The virtual board as a lab's board (docs/hil-farm.md): its power by a
   # script, its console on a TCP port, its relay as its hardware map says.
-  relay_port=$(free_port) console_port=$(free_port)
-  sed "s/^relay: .*/relay: tcp:127.0.0.1:$relay_port/" "$source/hil/boards/virtual-board-tcp.yaml" > vb1.yaml
-  power="bash $templates/virtual-board-power.sh"
-  serve="bash $vb/serve.sh --cache $aarch64/virtual-board/cache --board $aarch64/platform/linux/gabarit-board --relay $aarch64/platform/linux/gabarit-hil-relay --port $relay_port --console-port $console_port --log $work/vb1/qemu.log"
-  cat > devices/worker2-vb1.jinja2 <<DICT
-{% extends 'gabarit-board.jinja2' %}
-{% set gabarit = '$gabarit' %}
-{% set gabarit_board = '$work/vb1.yaml' %}
-{% set connection_command = 'bash $templates/virtual-board-console.sh $console_port' %}
-{% set power_on_command = '$power on $work/vb1 -- $serve --bundle ' ~ gabarit_bundle %}
-{% set hard_reset_command = power_on_command %}
-{% set power_off_command = '$power off $work/vb1' %}
-DICT
+  bash "$templates/virtual-board-device.sh" "$aarch64" "$work/vb1" "$gabarit" > devices/worker2-vb1.jinja2
   lava-server manage device-types add gabarit-board
   lava-server manage devices add --device-type gabarit-board --worker worker2 worker2-vb1
 fi
