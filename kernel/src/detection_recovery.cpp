@@ -15,6 +15,13 @@ float axis_bound(const Axis& a) noexcept { return a.max > -a.min ? a.max : -a.mi
 float model_side(const TableView& table) noexcept {
   return static_cast<float>(table.model_width() > table.model_height() ? table.model_width() : table.model_height());
 }
+// The model's points' larger extent: the ROI less the translations' span
+// (the model image may have a margin of background around them).
+float points_extent(const TableView& table) noexcept {
+  const float w = static_cast<float>(table.roi_width()) - (table.axis_x().max - table.axis_x().min);
+  const float h = static_cast<float>(table.roi_height()) - (table.axis_y().max - table.axis_y().min);
+  return w > h ? w : h;
+}
 }  // namespace
 
 float DetectionRecovery::frame_bound_squared() const noexcept {
@@ -28,16 +35,70 @@ bool DetectionRecovery::within_table_reach(const LastSighting& last, const Pose&
 }
 
 bool DetectionRecovery::within_reach(const LastSighting& last, const Pose& pose) const noexcept {
+  if (is_copy(last, pose, last.frames_since)) return false;
   if (lookalike_d2_ > 0.0f && distance_squared(pose, last.pose) > 0.25f * lookalike_d2_) return false;  // beyond the midpoint
   return within_table_reach(last, pose);
+}
+
+// Whether `pose`, seen `since` frames after the target's last sighting, is
+// the look-alike followed since that sighting: where it can have got to
+// since it was seen, and nearer there than the last sighting.
+bool DetectionRecovery::is_copy(const LastSighting& last, const Pose& pose, std::uint32_t since) const noexcept {
+  if (!copy_known_ || !copies_distinct_ || since < copy_since_ || last.pose.x != copy_last_.x || last.pose.y != copy_last_.y ||
+      last.pose.theta_deg != copy_last_.theta_deg)
+    return false;
+  const float frames = static_cast<float>(since - copy_since_) + 1.0f;
+  const float d2 = distance_squared(pose, copy_);
+  return d2 <= frames * frames * frame_bound_squared() && d2 < distance_squared(pose, last.pose);
+}
+
+void DetectionRecovery::note_copy(const LastSighting& last, const Pose& pose) noexcept {
+  copy_known_ = true;
+  copy_ = pose;
+  copy_last_ = last.pose;
+  copy_since_ = search_since_;
+}
+
+// The detection of a search's to take (`count` for none), the look-alike
+// followed set aside first (and noted where it is now, or first noted).
+std::uint32_t DetectionRecovery::choose(Detection* found, std::uint32_t& count, const LastSighting& last) noexcept {
+  std::uint32_t copy = count;
+  for (std::uint32_t j = 0; j < count; ++j)
+    if (is_copy(last, found[j].pose, search_since_) &&
+        (copy == count || distance_squared(found[j].pose, copy_) < distance_squared(found[copy].pose, copy_)))
+      copy = j;
+  if (copy < count) {
+    note_copy(last, found[copy].pose);
+    for (std::uint32_t j = copy + 1; j < count; ++j) found[j - 1] = found[j];
+    --count;
+    // Where the look-alike is, the target is not: the rest are judged by
+    // the table's reach alone (the midpoint bound stands for a copy whose
+    // place is unknown).
+    std::uint32_t k = 0;
+    while (k < count && !within_table_reach(last, found[k].pose)) ++k;
+    return k;
+  }
+  const std::uint32_t k = note_lookalikes(found, count) ? nearest_alike(found, count, last) : best_within_reach(found, count, last);
+  if (copies_distinct_) {
+    // A look-alike known, the target hidden: the best alike detection not
+    // taken is the copy, followed from now on until the target is seen again.
+    for (std::uint32_t j = 0; j < count; ++j)
+      if (j != k && found[j].score >= kLookalikeRatio * target_score_) {
+        note_copy(last, found[j].pose);
+        break;
+      }
+  }
+  return k;
 }
 
 bool DetectionRecovery::note_lookalikes(const Detection* found, std::uint32_t count) noexcept {
   if (!(target_score_ > 0.0f)) return false;  // no survey: nothing to compare with
   // Apart: two per-frame bounds, and the model image's larger side (shifted
   // along itself, an elongated or self-similar object matches well: that
-  // is the target, not a copy of it).
-  const float side = model_side(finder_.table());
+  // is the target, not a copy of it); where the look-alikes stand clear of
+  // the clutter (note_survey), the model's points' extent: two objects no
+  // nearer than that do not overlap.
+  const float side = copies_distinct_ ? points_extent(finder_.table()) : model_side(finder_.table());
   const float bound2 = 4.0f * frame_bound_squared();
   const float apart = side * side > bound2 ? side * side : bound2;
   const float alike = kLookalikeRatio * target_score_;
@@ -63,6 +124,8 @@ void DetectionRecovery::reset() noexcept {
 
 void DetectionRecovery::restart_survey() noexcept {
   surveyed_ = false;
+  copy_known_ = false;
+  copies_distinct_ = false;
   lookalike_d2_ = 0.0f;
   target_score_ = 0.0f;
   if (purpose_ == Purpose::kSurvey) {
@@ -160,16 +223,39 @@ Status DetectionRecovery::survey(const ImageView& image, const Pose& target, Tra
 void DetectionRecovery::note_survey(Detection* found, std::uint32_t count, const Pose& target) noexcept {
   lookalike_d2_ = 0.0f;
   target_score_ = 0.0f;
+  copies_distinct_ = false;
   std::uint32_t k = 0;
   while (k < count && distance_squared(found[k].pose, target) > frame_bound_squared()) ++k;
   if (count == 0) return;
+  // Fewer detections than asked for: the rest scored below the finder's floor.
+  const bool list_full = count >= (options_.candidates < kReachDetections ? options_.candidates : kReachDetections);
   if (k == count) {
     found[count] = found[0];
     found[count].pose = target;
     ++count;
   }
   target_score_ = found[k].score;
-  note_lookalikes(found, count);
+  // The look-alikes stand clear of the clutter when every other detection
+  // scores well below the target, and the clutter's level is seen (a
+  // detection that low, or the list not full).
+  bool clear = !list_full;
+  for (std::uint32_t i = 0; i < count; ++i) {
+    const float score = found[i].score;
+    if (score < kLookalikeRatio * target_score_ && score >= kClutterRatio * target_score_) {
+      clear = false;
+      break;
+    }
+    if (score < kClutterRatio * target_score_) clear = true;
+  }
+  if (note_lookalikes(found, count)) {
+    copies_distinct_ = clear;
+    return;
+  }
+  if (!clear) return;
+  // Clear of the clutter, a copy nearer the target than the model image's
+  // side is a look-alike if it is apart by the points' extent.
+  copies_distinct_ = true;
+  copies_distinct_ = note_lookalikes(found, count);
 }
 
 // The target and a copy both in view: the one nearer where the target would
@@ -212,6 +298,7 @@ Status DetectionRecovery::run(const ImageView& image, const LastSighting& last, 
   Window window;  // a search under way keeps the one it began with
   if (!going_on) {
     search_begun_ = n;
+    search_since_ = last.frames_since;
     // Following: the lead, as far off as the frames since it was seen.
     search_from_ = following_ ? LastSighting{lead_, {}, n - lead_frame_} : last;
     window = reach_window(image, search_from_, following_ ? kFollowAhead : kSearchAhead);
@@ -223,7 +310,7 @@ Status DetectionRecovery::run(const ImageView& image, const LastSighting& last, 
   if (!done) return Status::kOk;
   // Following up or not, the rules are the last sighting's: a lead is where
   // to look, not what to take.
-  const std::uint32_t k = note_lookalikes(found, count) ? nearest_alike(found, count, last) : best_within_reach(found, count, last);
+  const std::uint32_t k = choose(found, count, last);
   const bool followed = following_;
   following_ = false;
   out.searched = true;

@@ -257,5 +257,37 @@ TEST(DetectionRecovery, ALookalikeSeenBoundsWhereTheTargetIsTakenAgain) {
   EXPECT_TRUE(fresh.within_reach(last, {220, 200, 30, 0}));
 }
 
+// A copy that orbits the hidden target comes nearer its last sighting than
+// the midpoint: followed from where it was first seen in the loss, it is
+// still not taken, and the target, reappearing beyond the midpoint, is.
+TEST(DetectionRecovery, ALookalikeFollowedThroughALossIsNotTakenNearerThanTheMidpoint) {
+  Finding t;
+  auto& [rig, finder, options, buffers, fine] = t;
+  DetectionRecovery stage(finder, options, buffers.scratch(fine.view()));
+  const Pose target{80, 80, 0, 0};
+  ASSERT_EQ(stage.survey(twins(rig, 80, 80, 0, 220, 200, 30).view(), target, fine.view(), kUnlimitedWork), Status::kOk);
+  ASSERT_NEAR(std::sqrt(stage.lookalike_distance_squared()), 184.4, 1.0);  // the midpoint 92 px off
+  stage.reset();
+  SearchResult found;
+  std::uint32_t since = 20;  // frames since the last sighting: the table's bound reaches 119 px
+  for (int step = 0; step <= 20; ++step, ++since) {
+    // 4 px a frame in x and y (the table's bound), from 184 px off to 78.
+    const float cx = 220.0f - 4.0f * static_cast<float>(step), cy = 200.0f - 4.0f * static_cast<float>(step);
+    const app::GrayImage copy_only = testing::draw_points(rig.points, cx, cy, 30, kSide);
+    ASSERT_EQ(stage.run(copy_only.view(), {target, {}, since}, fine.view(), kUnlimitedWork, found), Status::kOk);
+    EXPECT_TRUE(found.searched);
+    EXPECT_EQ(found.vote.best.votes, 0u) << "the copy taken at " << cx << "," << cy;
+    EXPECT_FALSE(stage.within_reach({target, {}, since}, {cx, cy, 30, 0})) << cx << "," << cy;
+  }
+  // The target back 102 px off, beyond the midpoint, the copy still 80 px from it.
+  ASSERT_EQ(stage.run(twins(rig, 180, 60, 10, 140, 120, 30).view(), {target, {}, since}, fine.view(), kUnlimitedWork, found),
+            Status::kOk);
+  EXPECT_LE(std::hypot(found.from.x - 180, found.from.y - 60), 2.0);
+  // Another sighting: the copy is no longer followed, and the midpoint bounds the reach again.
+  const LastSighting elsewhere{{82, 80, 0, 0}, {}, 30};
+  EXPECT_TRUE(stage.within_reach(elsewhere, {140, 120, 30, 0}));
+  EXPECT_FALSE(stage.within_reach(elsewhere, {184, 60, 10, 0}));
+}
+
 }  // namespace
 }  // namespace gabarit

@@ -42,7 +42,18 @@ namespace gabarit {
 // lost rather than follow the copy), unless the target and a copy are both
 // in view: then the one nearer where the target would be at its last
 // velocity is taken. Of candidates alike in score within reach, the one
-// nearest the last sighting is taken.
+// nearest the last sighting is taken. Where the survey's look-alikes stand
+// clear of the clutter (every other detection below kClutterRatio of the
+// target's score, and one that low seen or the list not full), a copy is
+// told from a self-match by the model's points' extent rather than the
+// image's side, and the copy is followed until the target is seen again: a
+// detection alike in score that a lost frame's search does not take is
+// the copy, and each later search's detection where the copy can have got
+// to since (the table's bound per frame), and nearer it than the last
+// sighting, is the copy again: it is set aside and the rest are judged by
+// the table's reach alone (a copy that orbits the hidden target comes
+// within the midpoint of where the target was last seen, and the target
+// may reappear beyond it). within_reach() refuses the copy likewise.
 // Cost: each search is spread over frames (finder_search.hpp) under the
 // caller's budget of work per frame, so no frame pays for a whole search:
 // a lost frame's search goes on where the last one stopped, and its result
@@ -73,6 +84,7 @@ class DetectionRecovery {
   void reset() noexcept;
   static constexpr std::uint32_t kReachDetections = 4;
   static constexpr float kLookalikeRatio = 0.9f;
+  static constexpr float kClutterRatio = 0.75f;
   static constexpr std::uint32_t kSearchAhead = 4;
   static constexpr std::uint32_t kFollowAhead = 1;
   static constexpr std::uint32_t kCatchUpVotes = 3;
@@ -126,6 +138,10 @@ class DetectionRecovery {
   // The detection to take, by the rules above; `count` for none.
   std::uint32_t nearest_alike(const Detection* found, std::uint32_t count, const LastSighting& last) const noexcept;
   std::uint32_t best_within_reach(const Detection* found, std::uint32_t count, const LastSighting& last) const noexcept;
+  bool is_copy(const LastSighting& last, const Pose& pose, std::uint32_t since) const noexcept;
+  void note_copy(const LastSighting& last, const Pose& pose) noexcept;
+  // Sets the look-alike aside (count then excludes it) and notes where it is.
+  std::uint32_t choose(Detection* found, std::uint32_t& count, const LastSighting& last) noexcept;
   FinderSearch search_;
   Purpose purpose_ = Purpose::kNone;
   Window window_;  // the search's, fixed while it goes on
@@ -140,6 +156,14 @@ class DetectionRecovery {
   std::uint32_t lost_frames_ = 0;
   Detection last_;
   float lookalike_d2_ = 0.0f;
+  bool copies_distinct_ = false;  // the survey's look-alikes stand clear of the clutter
+  // The look-alike followed since the target's last sighting (copy_last_):
+  // where it was seen, copy_since_ frames after that sighting.
+  bool copy_known_ = false;
+  Pose copy_;
+  Pose copy_last_;
+  std::uint32_t copy_since_ = 0;
+  std::uint32_t search_since_ = 0;  // the frames since the last sighting when the search began
   float target_score_ = 0.0f;  // the survey's score at the target (0: no survey)
 };
 
