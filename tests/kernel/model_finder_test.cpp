@@ -230,14 +230,20 @@ TEST(DetectionRecovery, ASearchSpreadOverFramesBoundsEachFrameAndStillFindsTheTa
   EXPECT_LE(spread.frames, 30);
 }
 
+// The target at (80, 80), surveyed with a copy 184 px off, at (220, 200).
+constexpr Pose kSurveyedTarget{80, 80, 0, 0};
+void survey_with_a_copy(Finding& t, DetectionRecovery& stage) {
+  ASSERT_EQ(stage.survey(twins(t.rig, 80, 80, 0, 220, 200, 30).view(), kSurveyedTarget, t.fine.view(), kUnlimitedWork), Status::kOk);
+  ASSERT_NEAR(stage.lookalike_distance_squared(), 140.0f * 140 + 120 * 120, 200.0f);
+}
+
 TEST(DetectionRecovery, ALookalikeSeenBoundsWhereTheTargetIsTakenAgain) {
   Finding t;
   auto& [rig, finder, options, buffers, fine] = t;
   DetectionRecovery stage(finder, options, buffers.scratch(fine.view()));
   // Surveyed with a copy 184 px off: the reach is at most half that.
-  const Pose target{80, 80, 0, 0};
-  ASSERT_EQ(stage.survey(twins(rig, 80, 80, 0, 220, 200, 30).view(), target, fine.view(), kUnlimitedWork), Status::kOk);
-  EXPECT_NEAR(stage.lookalike_distance_squared(), 140.0f * 140 + 120 * 120, 200.0f);
+  const Pose target = kSurveyedTarget;
+  ASSERT_NO_FATAL_FAILURE(survey_with_a_copy(t, stage));
   const LastSighting last{target, {}, 1000};  // long lost: the table's bound alone would reach anywhere
   EXPECT_TRUE(stage.within_reach(last, {150, 140, 0, 0}));
   EXPECT_FALSE(stage.within_reach(last, {160, 150, 0, 0}));
@@ -264,9 +270,8 @@ TEST(DetectionRecovery, ALookalikeFollowedThroughALossIsNotTakenNearerThanTheMid
   Finding t;
   auto& [rig, finder, options, buffers, fine] = t;
   DetectionRecovery stage(finder, options, buffers.scratch(fine.view()));
-  const Pose target{80, 80, 0, 0};
-  ASSERT_EQ(stage.survey(twins(rig, 80, 80, 0, 220, 200, 30).view(), target, fine.view(), kUnlimitedWork), Status::kOk);
-  ASSERT_NEAR(std::sqrt(stage.lookalike_distance_squared()), 184.4, 1.0);  // the midpoint 92 px off
+  const Pose target = kSurveyedTarget;
+  ASSERT_NO_FATAL_FAILURE(survey_with_a_copy(t, stage));  // the midpoint 92 px off
   stage.reset();
   SearchResult found;
   std::uint32_t since = 20;  // frames since the last sighting: the table's bound reaches 119 px
