@@ -78,7 +78,7 @@ std::uint32_t DetectionRecovery::choose(Detection* found, std::uint32_t& count, 
     while (k < count && !within_table_reach(last, found[k].pose)) ++k;
     return k;
   }
-  const std::uint32_t k = note_lookalikes(found, count) ? nearest_alike(found, count, last) : best_within_reach(found, count, last);
+  const std::uint32_t k = note_lookalikes(found, count, copies_distinct_) ? nearest_alike(found, count, last) : best_within_reach(found, count, last);
   if (copies_distinct_) {
     // A look-alike known, the target hidden: the best alike detection not
     // taken is the copy, followed from now on until the target is seen again.
@@ -91,14 +91,14 @@ std::uint32_t DetectionRecovery::choose(Detection* found, std::uint32_t& count, 
   return k;
 }
 
-bool DetectionRecovery::note_lookalikes(const Detection* found, std::uint32_t count) noexcept {
+bool DetectionRecovery::note_lookalikes(const Detection* found, std::uint32_t count, bool by_extent) noexcept {
   if (!(target_score_ > 0.0f)) return false;  // no survey: nothing to compare with
   // Apart: two per-frame bounds, and the model image's larger side (shifted
   // along itself, an elongated or self-similar object matches well: that
-  // is the target, not a copy of it); where the look-alikes stand clear of
-  // the clutter (note_survey), the model's points' extent: two objects no
-  // nearer than that do not overlap.
-  const float side = copies_distinct_ ? points_extent(finder_.table()) : model_side(finder_.table());
+  // is the target, not a copy of it); by_extent (where the look-alikes
+  // stand clear of the clutter, note_survey), the model's points' extent:
+  // two objects no nearer than that do not overlap.
+  const float side = by_extent ? points_extent(finder_.table()) : model_side(finder_.table());
   const float bound2 = 4.0f * frame_bound_squared();
   const float apart = side * side > bound2 ? side * side : bound2;
   const float alike = kLookalikeRatio * target_score_;
@@ -247,15 +247,10 @@ void DetectionRecovery::note_survey(Detection* found, std::uint32_t count, const
     }
     if (score < kClutterRatio * target_score_) clear = true;
   }
-  if (note_lookalikes(found, count)) {
-    copies_distinct_ = clear;
-    return;
-  }
-  if (!clear) return;
   // Clear of the clutter, a copy nearer the target than the model image's
   // side is a look-alike if it is apart by the points' extent.
-  copies_distinct_ = true;
-  copies_distinct_ = note_lookalikes(found, count);
+  if (note_lookalikes(found, count, false)) copies_distinct_ = clear;
+  else if (clear) copies_distinct_ = note_lookalikes(found, count, true);
 }
 
 // The target and a copy both in view: the one nearer where the target would

@@ -116,9 +116,10 @@ class DetectionRecovery {
   std::uint32_t interval_ = 1;
   // The table's largest x and y step between two frames, as a distance.
   float frame_bound_squared() const noexcept;
-  // Notes any pair of `found` alike in score and apart as a look-alike;
-  // true if there is one (the target and a copy both in view).
-  bool note_lookalikes(const Detection* found, std::uint32_t count) noexcept;
+  // Notes any pair of `found` alike in score and apart (by the model's
+  // points' extent, else its image's side) as a look-alike; true if there
+  // is one (the target and a copy both in view).
+  bool note_lookalikes(const Detection* found, std::uint32_t count, bool by_extent) noexcept;
   // Within the table's bound of the last sighting, look-alikes aside.
   bool within_table_reach(const LastSighting& last, const Pose& pose) const noexcept;
   // The best kReachDetections detections (at most the finder's candidates) into found.
