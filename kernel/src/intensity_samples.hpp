@@ -392,6 +392,35 @@ struct OutlineParts {
   }
 };
 
+// Samples gathered for the bilinear blend: each one's frame pixels (two
+// bytes of the row at or above it, FrameSample's row0[0] in the low byte and
+// row0[1] in the high, and the two below), its weights (1/256) and its
+// model pixel, each in its own array. The blend and the sums run over these
+// arrays alone, a loop the compiler vectorises in 16-bit lanes; gathering
+// the pixels, which a vector unit cannot do, is the caller's loop. The
+// same sums as FrameSample::value and add_sample give sample by sample
+// (exact integers in another order).
+struct GatheredSamples {
+  static constexpr std::uint32_t kCapacity = 128;
+  // The blend runs over whole blocks of kBlock samples, the last one padded
+  // with black pixels (whose b is 0, adding nothing to any sum): no sample
+  // takes a vector loop's slower scalar tail.
+  static constexpr std::uint32_t kBlock = 16;
+  std::uint16_t top_pair[kCapacity + kBlock], bottom_pair[kCapacity + kBlock];
+  std::uint8_t wx[kCapacity + kBlock], wy[kCapacity + kBlock];
+  std::uint8_t model[kCapacity + kBlock];
+  std::uint32_t count = 0;
+  // The sums so far: of the frame values b, their squares and their
+  // products with the model pixels.
+  std::uint64_t b_sum = 0, bb = 0, ab = 0;
+
+  // Two horizontally adjacent pixels as top_pair holds them, whatever the
+  // target's byte order.
+  static std::uint16_t pair(const std::uint8_t* p) noexcept { return static_cast<std::uint16_t>(p[0] | p[1] << 8); }
+  // Adds the gathered samples to the sums and empties the arrays.
+  void flush() noexcept;
+};
+
 // The correlation from its exact sums, as sign(r) r^2: n^2 times the
 // covariance and the variances, exact in 128 bits, then rounded once to
 // float; sign(cov) cov^2 / (va vb) is taken as (cov / va) (cov / vb), whose

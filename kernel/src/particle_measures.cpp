@@ -359,35 +359,43 @@ bool IntensityCorrelationMeasure::listed_correlation(const Pose& pose, OutlineRi
     }
   };
   // Run by run: a run's row offsets and its first model pixel once, then
-  // each sample its column's offsets and the model pixel a step on (fewer
-  // live values than a sample's own row and model lookups: the three sums
-  // stay in registers instead of memory on x86-64).
+  // each sample its column's offsets and the model pixel a step on. The
+  // samples' pixels are gathered into arrays and blended and summed there
+  // (GatheredSamples), a loop the compiler vectorises.
   const auto sum_inside = [&](std::uint32_t begin, std::uint32_t end, const ModelSums& model, FrameSums& frame_sums,
                               ImageSums& model_sums) {
     const std::size_t model_step = stack_.step;
-    std::uint64_t b_sum = 0, bb = 0, ab = 0;
+    const std::size_t stride = frame_.stride;
+    const std::uint8_t* const pixels = frame_.pixels;
+    GatheredSamples gathered;
     for (std::uint32_t i = begin; i < end;) {
       const Sample& first = list_[i];
       const Offset row = rows[first.row];
       const std::uint8_t* model_pixel = m.pixels + std::size_t{first.v} * m.stride + first.u;
-      const std::uint32_t n = first.run;
-      const Offset* const run_end = columns + first.column + n;
-      for (const Offset* column = columns + first.column; column != run_end; ++column, model_pixel += model_step) {
-        const std::int64_t px = column->x - row.x, py = column->y + row.y;
-        FrameSample at;
-        at.row0 = frame_.pixels + static_cast<std::size_t>(py >> 16) * frame_.stride + static_cast<std::size_t>(px >> 16);
-        at.row1 = at.row0 + frame_.stride;
-        at.wx = static_cast<std::uint32_t>(px >> 8) & 255u;
-        at.wy = static_cast<std::uint32_t>(py >> 8) & 255u;
-        const std::uint64_t b = at.value(), a = *model_pixel;
-        b_sum += b;
-        bb += b * b;
-        ab += a * b;
+      const Offset* column = columns + first.column;
+      for (std::uint32_t left = first.run; left > 0;) {
+        // Locals throughout: the arrays' bytes may alias anything, so a
+        // member read in the loop would be read again after every store.
+        const std::uint32_t filled = gathered.count, room = GatheredSamples::kCapacity - filled;
+        const std::uint32_t take = left < room ? left : room;
+        for (std::uint32_t k = filled; k < filled + take; ++k, ++column, model_pixel += model_step) {
+          const std::int64_t px = column->x - row.x, py = column->y + row.y;
+          const std::uint8_t* const p = pixels + static_cast<std::size_t>(py >> 16) * stride + static_cast<std::size_t>(px >> 16);
+          gathered.top_pair[k] = GatheredSamples::pair(p);
+          gathered.bottom_pair[k] = GatheredSamples::pair(p + stride);
+          gathered.wx[k] = static_cast<std::uint8_t>(px >> 8);
+          gathered.wy[k] = static_cast<std::uint8_t>(py >> 8);
+          gathered.model[k] = *model_pixel;
+        }
+        gathered.count = filled + take;
+        left -= take;
+        if (gathered.count == GatheredSamples::kCapacity) gathered.flush();
       }
-      i += n;
+      i += first.run;
     }
-    frame_sums = {end - begin, b_sum, bb};
-    model_sums = {model.a, model.aa, ab};
+    gathered.flush();
+    frame_sums = {end - begin, gathered.b_sum, gathered.bb};
+    model_sums = {model.a, model.aa, gathered.ab};
   };
   OutlineParts parts;
   const auto& box = sample_box_;
