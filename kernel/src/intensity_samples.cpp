@@ -6,9 +6,10 @@
 namespace gabarit::intensity {
 
 // On x86-64 Linux GCC also builds the blend for AVX2 and the loader picks
-// the clone the CPU runs (an ifunc): its 16 16-bit lanes and 32-bit
-// multiplies blend twice the samples of SSE2's per instruction. The
-// integers are the same, so the sums are the same on any CPU and target.
+// the clone the CPU runs (an ifunc): twice SSE2's lanes, and the 32-bit
+// multiply SSE2 lacks. The integers are the same, so the sums are the same
+// on any CPU and target. (Measured: docs/performance.md, "The particle
+// measure's blend in vector lanes".)
 #if defined(__x86_64__) && defined(__linux__) && defined(__GNUC__) && !defined(__clang__)
 #define GABARIT_BLEND_CLONES __attribute__((target_clones("avx2", "default")))
 #else

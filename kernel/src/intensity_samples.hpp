@@ -397,7 +397,8 @@ struct OutlineParts {
 // row0[1] in the high, and the two below), its weights (1/256) and its
 // model pixel, each in its own array. The blend and the sums run over these
 // arrays alone, a loop the compiler vectorises in 16-bit lanes; gathering
-// the pixels, which a vector unit cannot do, is the caller's loop. The
+// the pixels from all over the frame, which it does not vectorise, is the
+// caller's loop. The
 // same sums as FrameSample::value and add_sample give sample by sample
 // (exact integers in another order).
 struct GatheredSamples {
