@@ -247,8 +247,9 @@ void DetectionRecovery::note_survey(Detection* found, std::uint32_t count, const
     }
     if (score < kClutterRatio * target_score_) clear = true;
   }
-  // Clear of the clutter, a copy nearer the target than the model image's
-  // side is a look-alike if it is apart by the points' extent.
+  // Look-alikes apart by the model image's side first; failing those, and
+  // only clear of the clutter, a copy nearer the target than that side is a
+  // look-alike if it is apart by the points' extent.
   if (note_lookalikes(found, count, false)) copies_distinct_ = clear;
   else if (clear) copies_distinct_ = note_lookalikes(found, count, true);
 }
