@@ -21,6 +21,9 @@ SessionProfile resolved(const SessionProfile& profile, const TableView& table, c
   SessionProfile p = resolve_recovery(
       checked(profile), table.has_model_images() && (detector ? *detector : detector_of(table)).kind != table_format::DetectorKind::kBinary);
   if (p.tracker == TrackerKind::kParticle) {
+    // Detection runs where the table verifies (ParticleRunOptions::detection).
+    if ((detector ? *detector : detector_of(table)).kind == table_format::DetectorKind::kBinary || !table.has_model_images())
+      p.particle_improvements_off |= kImproveDetection;
     p.particle_measure = resolved_measure(p.particle_measure, table.has_model_images());
     if (p.particle_measure == ParticleMeasureKind::kIntensity && !table.has_model_images())
       throw Error("particle filter: the intensity measure needs a table with model images (tables build from images stores them)");
@@ -113,6 +116,7 @@ void HostedSession::fit_frame(std::uint32_t width, std::uint32_t height) {
     ParticleRunOptions po = particle_run_options(profile_);
     po.measure = ParticleMeasureKind::kEdges;
     po.proposals = 0;  // ParticleRecovery votes the heaviest modes itself (docs/particle-filter.md, "Re-acquisition")
+    po.detection = false;  // it drives the filter itself (edge_filter), not ParticleTracker::step
     particles_ = std::make_unique<ParticleTracker>(table_, width, height, po);
     particles_->start(start_pose_);
     particle_recovery_.emplace(table_, detector_, particles_->edge_filter());
@@ -145,7 +149,7 @@ Status HostedSession::particle_step(const ImageView& frame, SessionResult& out) 
   } else if (frame.width != particle_width_ || frame.height != particle_height_) {
     return Status::kInvalidArgument;
   }
-  out = particle_session_result(particles_->step(frame), particles_->core().ledger());
+  out = particle_session_result(particles_->step(frame), particles_->ledger());
   return Status::kOk;
 }
 

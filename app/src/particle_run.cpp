@@ -6,6 +6,7 @@
 #include <string>
 
 #include "gabarit/app/error.hpp"
+#include "gabarit/detection_recovery.hpp"
 
 namespace gabarit::app {
 
@@ -22,11 +23,36 @@ ParticleRunOptions particle_run_options(const SessionProfile& profile) {
   o.filter = particle_filter_options(profile.particle_improvements_off);
   o.filter.mode_clustering = profile.particle_clustering;
   o.measure = profile.particle_measure;
+  o.detection = particle_detection(profile);
   // The stencil measure alone: one vote per frame and no edge map, modes
   // ranked by weight, confidence from the vote.
   if (o.measure == ParticleMeasureKind::kStencil) o.finer = false;
   return o;
 }
+
+namespace {
+
+// Re-acquisition by detection: the session's stage (detection_recovery.hpp)
+// over the particle tracker's frames, with its own finder and scratch.
+struct DetectionStage {
+  // fine_scratch: track_step's for the table, free between the filter's steps.
+  DetectionStage(const TableView& table, const Detector& detector, const FocusStack* stack, TrackerScratch fine_scratch,
+                 std::uint32_t width, std::uint32_t height)
+      : finder(table, detector),
+        finder_buffers(table, detector, FinderOptions{}, width, height),
+        fine(fine_scratch),
+        stage(finder, FinderOptions{}, finder_buffers.scratch(fine), kParticleDetectionInterval) {
+    if (stack != nullptr) finder.use_focus_stack(stack);
+  }
+  ModelFinder finder;
+  FinderBuffers finder_buffers;
+  TrackerScratch fine;
+  DetectionRecovery stage;
+  LastSighting last;       // the last tracking frame's estimate, and the frames since
+  bool searching = false;  // since a lost frame, until a tracking one
+};
+
+}  // namespace
 
 struct ParticleTracker::Parts {
   using StencilFilter = ParticleFilter<StencilVoteMeasure, EdgeCorrelationMeasure, EdgeMapLoader>;
@@ -70,6 +96,8 @@ struct ParticleTracker::Parts {
       if (edge_filter) edge_filter->propose_with(&*proposer);
       if (intensity_filter) intensity_filter->propose_with(&*proposer);
     }
+    if (o.detection && t.has_model_images() && detector.kind != table_format::DetectorKind::kBinary)
+      detection.emplace(t, detector, table_stack.get(), buffers.scratch(), w, h);  // the stencil measure votes within a step only
   }
   ParticleFilterCore& core() {
     if (edge_filter) return *edge_filter;
@@ -94,6 +122,8 @@ struct ParticleTracker::Parts {
   std::optional<EdgeParticleFilter> edge_filter;
   std::optional<StencilFilter> stencil_filter;
   std::optional<IntensityFilter> intensity_filter;
+  std::optional<DetectionStage> detection;
+  FrameLedger ledger;
 };
 
 ParticleTracker::ParticleTracker(const TableView& table, std::uint32_t max_width, std::uint32_t max_height,
@@ -112,6 +142,8 @@ ParticleTracker::ParticleTracker(const TableView& table, std::uint32_t max_width
 ParticleTracker::~ParticleTracker() = default;
 
 ParticleFilterCore& ParticleTracker::core() { return parts_->core(); }
+const FrameLedger& ParticleTracker::ledger() const { return parts_->ledger; }
+bool ParticleTracker::detects() const { return parts_->detection.has_value(); }
 
 EdgeParticleFilter& ParticleTracker::edge_filter() {
   if (!parts_->edge_filter) throw app::Error("particle filter: this one runs the stencil measure, not the edge measure");
@@ -123,14 +155,62 @@ void ParticleTracker::start(const Pose& initial) {
   const Status s = parts_->core().start(parts_->options.filter, initial, parts_->table.depth_count(), parts_->options.seed,
                                         {parts_->cloud, parts_->next, parts_->order});
   if (s != Status::kOk) throw app::Error(std::string("particle filter: start failed: ") + status_name(s));
+  if (DetectionStage* d = parts_->detection ? &*parts_->detection : nullptr) {
+    d->stage.reset();
+    d->stage.restart_survey();
+    d->last = {initial, {}, 0};
+    d->searching = false;
+  }
 }
 
 ParticleEstimate ParticleTracker::step(const ImageView& frame) {
+  Parts& p = *parts_;
+  DetectionStage* d = p.detection ? &*p.detection : nullptr;
+  FrameLedger detection_ledger;
+  if (d != nullptr) {
+    ++d->last.frames_since;
+    // After a lost frame, a search on this one, before the filter's step, so
+    // that the cloud is drawn around what it finds this frame.
+    if (d->searching) {
+      const std::uint64_t began = steady_nanoseconds();
+      SearchResult found;
+      if (const Status s = d->stage.run(frame, d->last, d->fine, kUnlimitedWork, found); s != Status::kOk)
+        throw app::Error(std::string("particle filter: detection failed: ") + status_name(s));
+      if (found.searched && found.vote.best.votes > 0) {
+        const Pose pose =
+            pose_of_cell(p.table, found.vote.best.cell, found.from, found.vote.roi_centre_x, found.vote.roi_centre_y);
+        if (d->stage.within_reach(d->last, pose)) p.core().reinitialise_around(pose, kParticleDetectionFraction);
+      }
+      detection_ledger.add(FramePhase::kRecovery, d->stage.last_work(), steady_nanoseconds() - began);
+    }
+  }
   ParticleEstimate e;
-  const Status s = parts_->edge_filter        ? parts_->edge_filter->step(frame, e)
-                   : parts_->intensity_filter ? parts_->intensity_filter->step(frame, e)
-                                              : parts_->stencil_filter->step(frame, e);
+  const Status s = p.edge_filter        ? p.edge_filter->step(frame, e)
+                   : p.intensity_filter ? p.intensity_filter->step(frame, e)
+                                        : p.stencil_filter->step(frame, e);
   if (s != Status::kOk) throw app::Error(std::string("particle filter: step failed: ") + status_name(s));
+  if (d != nullptr) {
+    if (e.state == TrackState::kTracking) {
+      const ParticleContext& c = p.core().context();
+      d->last = {e.pose, {c.vx, c.vy, c.vtheta, 0.0f}, 0};
+      d->searching = false;
+      // While tracking, the survey for look-alikes, a piece a frame until it
+      // has covered the frame (the session's floor of work per piece).
+      if (!d->stage.surveyed()) {
+        const std::uint64_t began = steady_nanoseconds();
+        const std::uint64_t budget = std::uint64_t{frame.width} * frame.height * kSurveyUnitsPerPixel;
+        if (const Status v = d->stage.survey(frame, e.pose, d->fine, budget); v != Status::kOk)
+          throw app::Error(std::string("particle filter: survey failed: ") + status_name(v));
+        detection_ledger.add(FramePhase::kSurvey, d->stage.last_work(), steady_nanoseconds() - began);
+      }
+    } else if (e.state == TrackState::kLost && !d->searching) {
+      d->stage.reset();  // a lost period begins
+      d->searching = true;
+    }
+  }
+  p.ledger = p.core().ledger();
+  for (std::uint32_t phase = 0; phase < kFramePhaseCount; ++phase)
+    p.ledger.add(static_cast<FramePhase>(phase), detection_ledger.work[phase], detection_ledger.ticks[phase]);
   return e;
 }
 
@@ -154,7 +234,7 @@ void run_particle_tracking(const TableView& table, app::FrameSource& frames, con
     const ParticleEstimate e = tracker->step(frame);
     const auto stop = std::chrono::steady_clock::now();
     // The row from the session's form of the estimate (session_profile.hpp), as HostedSession reports it.
-    const SessionResult result = particle_session_result(e, tracker->core().ledger());
+    const SessionResult result = particle_session_result(e, tracker->ledger());
     app::TrackRow row;
     row.frame = index;
     row.step = result.step;

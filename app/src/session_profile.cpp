@@ -99,7 +99,9 @@ bool default_numbers(const SessionProfile& p) noexcept {
          p.screen_stride == d.screen_stride && p.detect_after == d.detect_after && p.recovery_frames == d.recovery_frames &&
          p.survey_frames == d.survey_frames && p.particles == d.particles &&
          p.seed == d.seed && p.edge_stride == d.edge_stride && p.edge_tolerance == d.edge_tolerance &&
-         p.particle_improvements_off == d.particle_improvements_off && p.verify_refine == d.verify_refine &&
+         // Detection on or off travels in CAPS (kModeRecoveryDetection).
+         (p.particle_improvements_off & ~kImproveDetection) == (d.particle_improvements_off & ~kImproveDetection) &&
+         p.verify_refine == d.verify_refine &&
          p.particle_clustering == d.particle_clustering;
 }
 
@@ -107,6 +109,7 @@ bool default_numbers(const SessionProfile& p) noexcept {
 std::uint32_t particle_tracker_bits(const SessionProfile& p) noexcept {
   std::uint32_t bits = link::kModeParticleTracker;
   bits |= (static_cast<std::uint32_t>(p.particle_measure) << link::kModeParticleMeasureShift) & link::kModeParticleMeasureMask;
+  if (particle_detection(p)) bits |= link::kModeRecoveryDetection;
   if (!default_numbers(p)) bits |= link::kModeTuned;
   return bits;
 }
@@ -135,6 +138,7 @@ SessionProfile profile_from_mode_bits(std::uint32_t bits) noexcept {
   if ((bits & link::kModeParticleTracker) != 0) {
     p.tracker = TrackerKind::kParticle;
     p.particle_measure = static_cast<ParticleMeasureKind>((bits & link::kModeParticleMeasureMask) >> link::kModeParticleMeasureShift);
+    if ((bits & link::kModeRecoveryDetection) == 0) p.particle_improvements_off |= kImproveDetection;
     return p;
   }
   p.plain = (bits & link::kModeSession) == 0;

@@ -19,7 +19,8 @@ struct ImprovementName {
 constexpr ImprovementName kImprovementNames[] = {
     {"modes", kImproveModes},         {"disambiguation", kImproveDisambiguation}, {"narrowing", kImproveNarrowing},
     {"kinematics", kImproveKinematics}, {"reinit", kImproveReinit},               {"mode-filter", kImproveModeFilter},
-    {"velocity", kImproveVelocity},   {"proposals", kImproveProposals},           {"all", kAllImprovements}};
+    {"velocity", kImproveVelocity},   {"proposals", kImproveProposals},           {"detection", kImproveDetection},
+    {"all", kAllImprovements}};
 
 const char* recovery_name(RecoveryKind kind) {
   switch (kind) {
@@ -331,7 +332,9 @@ std::vector<Option> session_option_group() {
       {"--without", "LIST", "the particle filter's improvements to switch off, comma-separated: modes," + indent +
                                 "disambiguation, narrowing, kinematics, reinit, mode-filter, velocity," + indent +
                                 "proposals (--tracker particle: half the cloud drawn around the stencil" + indent +
-                                "vote's best cells); all: plain CONDENSATION"},
+                                "vote's best cells), detection (--tracker particle: while lost, the" + indent +
+                                "model searched for where the target can be, on tables that verify);" + indent +
+                                "all: plain CONDENSATION"},
       {"--mode-clustering", "seed|running-mean", "how the particle filter groups particles into modes: within the mode" + indent +
                                                    "radius of a mode's heaviest particle (default), or of its running" + indent +
                                                    "mean, a new mode only from a particle >= 5% of the heaviest's weight" + indent +

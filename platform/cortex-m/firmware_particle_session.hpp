@@ -27,6 +27,9 @@ namespace gabarit::mcu {
 inline constexpr app::SessionProfile kFirmwareParticleProfile = [] {
   app::SessionProfile p;
   p.tracker = app::TrackerKind::kParticle;
+  // No room for the finder beside the cloud and the frame slot: no
+  // re-acquisition by detection (CAPS says so: no kModeRecoveryDetection).
+  p.particle_improvements_off = app::kImproveDetection;
   return p;
 }();
 

@@ -43,7 +43,7 @@ SessionProfile tuned() {
   p.seed = 1234567890123ull;
   p.edge_stride = 9;
   p.edge_tolerance = 3;
-  p.particle_improvements_off = kImproveModes | kImproveReinit | kImproveProposals;
+  p.particle_improvements_off = kImproveModes | kImproveReinit | kImproveProposals | kImproveDetection;
   p.verify_refine = RefineBy::kQuadraticDesign;
   p.particle_clustering = ModeClustering::kRunningMean;
   return p;
@@ -302,10 +302,23 @@ TEST(SessionProfile, TheParticleTrackerTravelsInTheTextTheOptionsAndCaps) {
     p.particle_measure = m;
     for (int effect = 0; effect < 4; ++effect) {  // the stencil session's effects do not apply
       const std::uint32_t bits = mode_bits(p, (effect & 1) != 0, (effect & 2) != 0);
-      EXPECT_EQ(bits & ~(link::kModeParticleTracker | link::kModeParticleMeasureMask), 0u) << bits;
+      EXPECT_EQ(bits & ~(link::kModeParticleTracker | link::kModeParticleMeasureMask | link::kModeRecoveryDetection), 0u) << bits;
+      EXPECT_NE(bits & link::kModeRecoveryDetection, 0u) << bits;  // detection by default
       EXPECT_TRUE(profile_from_mode_bits(bits) == p) << bits;
     }
   }
+  // Without detection (a device that cannot run it): CAPS says so, and the
+  // profile is not tuned for it.
+  SessionProfile undetecting = p;
+  undetecting.particle_improvements_off = kImproveDetection;
+  EXPECT_FALSE(particle_detection(undetecting));
+  const std::uint32_t undetecting_bits = mode_bits(undetecting, false, false);
+  EXPECT_EQ(undetecting_bits & (link::kModeRecoveryDetection | link::kModeTuned), 0u) << undetecting_bits;
+  EXPECT_TRUE(profile_from_mode_bits(undetecting_bits) == undetecting);
+  EXPECT_FALSE(particle_run_options(undetecting).detection);
+  EXPECT_TRUE(particle_run_options(p).detection);
+  undetecting.particle_improvements_off = kAllImprovements;  // plain CONDENSATION: none
+  EXPECT_FALSE(particle_detection(undetecting));
   p.seed = 2;  // numbers do not travel: the harness refuses a tuned device
   EXPECT_NE(mode_bits(p, false, false) & link::kModeTuned, 0u);
   EXPECT_EQ(profile_from_mode_bits(mode_bits(SessionProfile{}, true, true)).tracker, TrackerKind::kStencil);
@@ -360,7 +373,9 @@ TEST(HostedSession, RunsTheProfilesParticleTrackerAsGabaritTrackDoes) {
 
     HostedSession hosted(table, p);
     const std::uint32_t resolved = measure == ParticleMeasureKind::kAuto ? 3u : 1u;  // intensity with images, as asked
-    EXPECT_EQ(hosted.mode(), link::kModeParticleTracker | (resolved << link::kModeParticleMeasureShift) | link::kModeTuned);
+    // The table verifies (model images, Canny): re-acquisition by detection.
+    EXPECT_EQ(hosted.mode(), link::kModeParticleTracker | (resolved << link::kModeParticleMeasureShift) |
+                                 link::kModeRecoveryDetection | link::kModeTuned);
     EXPECT_FALSE(hosted.started());
     EXPECT_FALSE(hosted.start(Pose{start.x, start.y, start.theta_deg, 2}));  // a depth the table does not have
     ASSERT_TRUE(hosted.start(start));

@@ -244,7 +244,7 @@ SceneResult run_scene(std::uint32_t index, std::uint32_t frames_per_scene, const
   for (const bool guided : {true, false}) {
     if (!particles) break;
     std::vector<app::PoseSample> poses;
-    std::vector<double> micros;
+    std::vector<double> micros, search_micros;
     MemoryFrames src(frames);
     app::ParticleRunOptions po;
     if (!guided) po.proposals = 0;
@@ -253,9 +253,13 @@ SceneResult run_scene(std::uint32_t index, std::uint32_t frames_per_scene, const
       poses.push_back({row.frame, row.step.pose.x, row.step.pose.y, row.step.pose.theta_deg, row.step.pose.depth, true});
       micros.push_back(row.micros);
       ledger.add(row);
+      // The frames its detection stage searched (after a lost frame).
+      if (row.ledger.work[static_cast<std::uint32_t>(FramePhase::kRecovery)] > 0) search_micros.push_back(row.micros);
     });
     out.methods.push_back(measure(poses, truth, micros, depth_counts, in_reach));
     out.methods.back().ledger = ledger.means();
+    out.methods.back().search_frames = search_micros.size();
+    for (double v : search_micros) out.methods.back().search_us += v / static_cast<double>(search_micros.size());
     out.names.push_back(guided ? kParticle : kParticleUnguided);
   }
   return out;

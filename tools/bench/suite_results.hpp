@@ -34,7 +34,8 @@ struct Measure {
   // Every method: returns to view (occlusions ending), and those re-acquired
   // (app::evaluate: within 2 px) within 5 and within 10 frames.
   int returns = 0, back_within_5 = 0, back_within_10 = 0;
-  // Sessions only: the frames that searched (lost, or re-acquiring) with their mean time.
+  // The frames that searched (a session lost or re-acquiring; the particle
+  // filter's detection stage) with their mean time.
   std::size_t search_frames = 0;
   double search_us = 0;
   LedgerMeans ledger;  // sessions and the particle filter: the frame-cost ledger's means per frame

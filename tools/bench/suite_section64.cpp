@@ -48,8 +48,8 @@ void section64_table(const std::vector<SceneResult>& scenes, const std::string& 
      << "The thesis's comparison of the two trackers (Fig. 6.60's error buckets, Fig. 6.61's time per frame) on this half's "
         "scenes, the reference point's error pooled over their visible frames. Time per frame splits the frames that "
         "searched (a session lost or re-acquiring: the grid, the particle filter or detection over the frame) from those "
-        "that tracked; the particle filter never searches. The thesis's own figures are not reproduced here: its text is "
-        "not available on this machine (docs/particle-filter.md).\n\n"
+        "that tracked; the particle filter's are those its detection stage searched, after a lost frame. The thesis's own "
+        "figures are not reproduced here: its text is not available on this machine (docs/particle-filter.md).\n\n"
      << "| method | < 6 px | < 12 px | > 12 px | > 20 px | > 40 px | mean error px | scenes >= 95% within 6 px | us/frame: "
         "tracking | search frames | us per search frame |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
   for (std::size_t m = 0; m < scenes[0].methods.size(); ++m) {

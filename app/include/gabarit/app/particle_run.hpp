@@ -43,7 +43,18 @@ struct ParticleRunOptions {
   // intensity and edge measures): the stencil vote's best cells drawn
   // around each frame, 0..kMaxParticleProposals (0: none).
   std::uint32_t proposals = kDefaultParticleProposals;
+  // Re-acquisition by detection (docs/particle-filter.md, "Re-acquisition by
+  // detection"): where the table verifies (model images, a grayscale
+  // detector), every kParticleDetectionInterval-th frame after a lost one the
+  // model finder searches where the target can have got to (the session's
+  // DetectionRecovery), and kParticleDetectionFraction of the cloud is drawn
+  // around what it finds within reach; while tracking, the stage surveys the
+  // frame for look-alikes. Off with kImproveDetection in the profile.
+  bool detection = true;
 };
+// Chosen on the scene suite's tuning half (docs/particle-filter.md).
+inline constexpr std::uint32_t kParticleDetectionInterval = 3;
+inline constexpr float kParticleDetectionFraction = 0.3f;
 
 // The profile's particle numbers (particles, seed, the edge measure's stride
 // and tolerance, the improvements switched off) and its measure (the stencil
@@ -62,6 +73,11 @@ class ParticleTracker {
   ParticleEstimate step(const app::GrayImage& frame) { return step(frame.view()); }
   ParticleEstimate step(const ImageView& frame);
   ParticleFilterCore& core();
+  // The last step's frame-cost ledger: the filter's, and the detection
+  // stage's search under kRecovery and survey under kSurvey.
+  const FrameLedger& ledger() const;
+  // Whether the detection stage runs (asked for, and the table verifies).
+  bool detects() const;
   // The filter with the edge measure (particle_recovery.hpp runs it).
   // Throws app::Error with the stencil measure.
   EdgeParticleFilter& edge_filter();

@@ -73,7 +73,12 @@ inline constexpr std::uint32_t kImproveModeFilter = 1u << 5;
 inline constexpr std::uint32_t kImproveVelocity = 1u << 6;
 inline constexpr std::uint32_t kAllImprovements = 1u << 7;
 inline constexpr std::uint32_t kImproveProposals = 1u << 8;  // vote-guided proposals (issue 31)
-inline constexpr std::uint32_t kKnownImprovements = (1u << 9) - 1;
+// Re-acquisition by detection while the filter is lost (ParticleRunOptions::
+// detection; not a filter option). Runs only where the table verifies (model
+// images, a grayscale detector); a device that cannot run it (the Cortex-M
+// firmware) has it off in its profile, and CAPS says which (mode_bits).
+inline constexpr std::uint32_t kImproveDetection = 1u << 9;
+inline constexpr std::uint32_t kKnownImprovements = (1u << 10) - 1;
 // The filter's options with the improvements in `off` switched off.
 ParticleFilterOptions particle_filter_options(std::uint32_t off) noexcept;
 
@@ -167,6 +172,11 @@ inline bool uses_table_focus_stack(const SessionProfile& p) noexcept { return !p
 // Recovery kinds that need the session's recovery on (auto and the grid do not:
 // without recovery they are nothing).
 inline bool needs_recovery(RecoveryKind k) noexcept { return k == RecoveryKind::kDetection || k == RecoveryKind::kParticles; }
+// Whether the particle tracker re-acquires by detection (neither
+// kImproveDetection nor kAllImprovements off).
+inline bool particle_detection(const SessionProfile& p) noexcept {
+  return (p.particle_improvements_off & (kImproveDetection | kAllImprovements)) == 0;
+}
 // The profile with RecoveryKind::kAuto made concrete for a table: detection
 // where the session verifies (`verifying_table`: model images and a
 // grayscale detector) and recovers, else the grid.

@@ -226,6 +226,9 @@ std::vector<std::byte> particle_vectors(const VectorSceneOptions& o, const Table
   app::ParticleRunOptions run;
   run.particles = o.particles;
   run.seed = o.seed;
+  // The firmware has no room for the finder (docs/particle-filter.md,
+  // "Re-acquisition by detection"): its profile runs without it.
+  run.detection = false;
   const app::ParticleMeasureKind measure = app::resolved_measure(run.measure, table);
   if (measure != app::ParticleMeasureKind::kEdges && measure != app::ParticleMeasureKind::kIntensity)
     throw app::Error("vectors: the particle vectors record the edge or the intensity measure");
