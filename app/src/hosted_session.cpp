@@ -18,12 +18,11 @@ const SessionProfile& checked(const SessionProfile& profile) {
 // The profile as it runs on `table`: the recovery stage and the particle
 // tracker's measure resolved (CAPS reports them so).
 SessionProfile resolved(const SessionProfile& profile, const TableView& table, const std::optional<Detector>& detector) {
-  SessionProfile p = resolve_recovery(
-      checked(profile), table.has_model_images() && (detector ? *detector : detector_of(table)).kind != table_format::DetectorKind::kBinary);
+  const bool verifies = table_verifies(table, detector ? *detector : detector_of(table));
+  SessionProfile p = resolve_recovery(checked(profile), verifies);
   if (p.tracker == TrackerKind::kParticle) {
     // Detection runs where the table verifies (ParticleRunOptions::detection).
-    if ((detector ? *detector : detector_of(table)).kind == table_format::DetectorKind::kBinary || !table.has_model_images())
-      p.particle_improvements_off |= kImproveDetection;
+    if (!verifies) p.particle_improvements_off |= kImproveDetection;
     p.particle_measure = resolved_measure(p.particle_measure, table.has_model_images());
     if (p.particle_measure == ParticleMeasureKind::kIntensity && !table.has_model_images())
       throw Error("particle filter: the intensity measure needs a table with model images (tables build from images stores them)");

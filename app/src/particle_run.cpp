@@ -96,7 +96,7 @@ struct ParticleTracker::Parts {
       if (edge_filter) edge_filter->propose_with(&*proposer);
       if (intensity_filter) intensity_filter->propose_with(&*proposer);
     }
-    if (o.detection && t.has_model_images() && detector.kind != table_format::DetectorKind::kBinary)
+    if (o.detection && table_verifies(t, detector))
       detection.emplace(t, detector, table_stack.get(), buffers.scratch(), w, h);  // the stencil measure votes within a step only
   }
   ParticleFilterCore& core() {

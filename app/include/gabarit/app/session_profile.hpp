@@ -177,8 +177,13 @@ inline bool needs_recovery(RecoveryKind k) noexcept { return k == RecoveryKind::
 inline bool particle_detection(const SessionProfile& p) noexcept {
   return (p.particle_improvements_off & (kImproveDetection | kAllImprovements)) == 0;
 }
+// Whether a session on `table` with `detector` can verify (and so detect):
+// the table carries model images and the detector is a grayscale one.
+inline bool table_verifies(const TableView& table, const Detector& detector) noexcept {
+  return table.has_model_images() && detector.kind != table_format::DetectorKind::kBinary;
+}
 // The profile with RecoveryKind::kAuto made concrete for a table: detection
-// where the session verifies (`verifying_table`: model images and a
+// where the session verifies (`verifying_table`, table_verifies: model images and a
 // grayscale detector) and recovers, else the grid.
 SessionProfile resolve_recovery(const SessionProfile& profile, bool verifying_table) noexcept;
 
