@@ -89,6 +89,7 @@ struct Options {
   std::uint32_t orientation_channels = 0;
   std::uint32_t detect_after = gabarit::RecoveryOptions{}.detect_after;
   std::uint32_t particles = 1000;
+  std::uint32_t particle_seeds = 1;
   bool decimation = false;
   std::uint32_t scenes = 0;
   std::uint32_t first = 0;
@@ -427,7 +428,7 @@ constexpr const char* kHelp =
     "usage: gabarit bench [--quick] [--out DIR] [--threads N] [--frames N] [--timing-frames N]\n"
     "       gabarit bench --microscope [--quick] [--out DIR]\n"
     "       gabarit bench --suite [--quick] [--out DIR] [--first I] [--scenes N] [--frames N] [--no-peer] [--no-particles]\n"
-    "                     [--no-detection] [--orientation-channels N] [--detect-after N]\n"
+    "                     [--no-detection] [--orientation-channels N] [--detect-after N] [--particle-seeds N]\n"
     "       gabarit bench --decimation [--quick] [--out DIR] [--threads N]\n"
     "       gabarit bench --pipette [--quick] [--out DIR] [--frames N] [--particles N]\n"
     "       gabarit bench --regression-csv FILE\n\n"
@@ -453,7 +454,9 @@ constexpr const char* kHelp =
     "                        detect and OpenCV's pyramid matchTemplate on every frame, re-acquisition by detection);\n"
     "                        --orientation-channels N builds the scenes' tables with N channels (format 1.3);\n"
     "                        --detect-after N: the re-acquisition-by-detection row searches its first N lost\n"
-    "                        frames with the grid (default 2, the session's)\n"
+    "                        frames with the grid (default 0, the session's); --particle-seeds N runs the\n"
+    "                        particle filter with seeds 1..N and counts issue 31's targets over scene-seeds too\n"
+    "                        (its rows stay seed 1's; default 1)\n"
     "  --decimation          the decimation policies instead (docs/experiments.md, \"Decimation\"): every\n"
     "                        policy x 11 keep ratios x 26 noise levels, one-step trials and continuous\n"
     "                        sequences (500/800 frames), tuning and held-out shapes, bytes and us/frame;\n"
@@ -517,6 +520,8 @@ int main(int argc, char** argv) {
         o.no_peer = true;
       } else if (a == "--no-particles") {
         o.no_particles = true;
+      } else if (a == "--particle-seeds") {
+        o.particle_seeds = static_cast<std::uint32_t>(count(1, 64));
       } else if (a == "--no-detection") {
         o.no_detection = true;
       } else if (a == "--detect-after") {
@@ -536,8 +541,9 @@ int main(int argc, char** argv) {
       throw gabarit::app::Error("give one of --microscope, --suite, --decimation and --pipette");
     if (o.pipette) return run_pipette({o.out, o.quick, static_cast<std::uint32_t>(o.grid_frames), o.particles});
     if (o.decimation) return run_decimation_study({o.out, o.quick, o.threads});
-    if ((o.scenes || o.first || o.no_peer || o.no_particles || o.no_detection) && !o.suite)
-      throw gabarit::app::Error("--first, --scenes, --no-peer, --no-particles and --no-detection apply to --suite");
+    if ((o.scenes || o.first || o.no_peer || o.no_particles || o.no_detection || o.particle_seeds > 1) && !o.suite)
+      throw gabarit::app::Error("--first, --scenes, --no-peer, --no-particles, --no-detection and --particle-seeds apply to --suite");
+    if (o.particle_seeds > 1 && o.no_particles) throw gabarit::app::Error("--particle-seeds needs the particle filter (not --no-particles)");
     if (o.microscope) return run_microscope(o.out, o.quick);
     if (o.suite) {
       SuiteOptions s;
@@ -548,6 +554,7 @@ int main(int argc, char** argv) {
       s.frames = static_cast<std::uint32_t>(o.grid_frames);
       s.peer = !o.no_peer;
       s.particles = !o.no_particles;
+      s.particle_seeds = o.particle_seeds;
       s.detection = !o.no_detection;
       s.orientation_channels = o.orientation_channels;
       s.detect_after = o.detect_after;

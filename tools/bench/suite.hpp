@@ -18,6 +18,7 @@ struct SuiteOptions {
   std::uint32_t frames = 0;       // 0: 160 (quick: 60)
   bool peer = true;               // run the NCC bank too
   bool particles = true;          // run the particle filter too (gabarit track --tracker particle)
+  std::uint32_t particle_seeds = 1;  // the particle filter with seeds 1..N: issue 31's targets over scene-seeds too
   bool detection = true;            // detection rows: gabarit detect, OpenCV's pyramid, re-acquisition by detection
   std::uint32_t orientation_channels = 0;  // the scenes' tables: 0 position only, else 2..16 channels (format 1.3)
   // The re-acquisition-by-detection row: lost frames searched by the grid first.

@@ -57,6 +57,10 @@ struct SceneResult {
   bool held_out = false;
   std::vector<Measure> methods;  // plain, session, then NCC (with the peer), then the particle filter (with particles)
   std::vector<const char*> names;
+  // With --particle-seeds N > 1: the particle filter (kParticle's run) with
+  // seeds 1..N, seed 1 being kParticle's row; issue 31's targets are then
+  // also counted over these scene-seeds.
+  std::vector<Measure> particle_seeds;
 };
 
 inline constexpr const char* kPlain = "plain loop (thesis)";
