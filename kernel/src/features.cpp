@@ -1,5 +1,8 @@
 #include "gabarit/features.hpp"
 
+#include <bit>
+
+#include "canny_rows.hpp"
 #include "gabarit/deterministic_math.hpp"
 
 namespace gabarit {
@@ -258,14 +261,12 @@ void magnitude_row(const ImageView& image, std::int64_t y, std::int64_t x_first,
   const std::int64_t inner_last = x_last > std::int64_t{image.width} - 2 ? std::int64_t{image.width} - 2 : x_last;
   for (std::int64_t x = x_first; x <= x_last; ++x) row[x - x_first] = 0;
   if (y < 1 || y + 1 >= std::int64_t{image.height}) return;
-  const std::uint8_t* up = image.pixels + static_cast<std::size_t>(y - 1) * image.stride;
+  if (inner_first > inner_last) return;
+  const std::uint8_t* up = image.pixels + static_cast<std::size_t>(y - 1) * image.stride + inner_first;
   const std::uint8_t* mid = up + image.stride;
   const std::uint8_t* down = mid + image.stride;
-  for (std::int64_t x = inner_first; x <= inner_last; ++x) {
-    const std::int32_t gx = (up[x + 1] + 2 * mid[x + 1] + down[x + 1]) - (up[x - 1] + 2 * mid[x - 1] + down[x - 1]);
-    const std::int32_t gy = (down[x - 1] + 2 * down[x] + down[x + 1]) - (up[x - 1] + 2 * up[x] + up[x + 1]);
-    row[x - x_first] = static_cast<std::uint16_t>(abs32(gx) + abs32(gy));
-  }
+  canny_rows::sobel_magnitudes(up, mid, down, static_cast<std::size_t>(inner_last - inner_first + 1),
+                               row + (inner_first - x_first));
 }
 
 }  // namespace
@@ -318,7 +319,18 @@ Status extract_canny(const ImageView& image, const ImageWindow& window, std::uin
     fill(y + 1, rows[2]);
     kept_columns(keep, y, s.x_begin, s.x_end, xb, xe);
     count.scanned += static_cast<std::uint64_t>(xe - xb);
-    for (std::int64_t x = xb; x < xe; ++x) {
+    // Whole vectors of the row decided at once where there is a vector
+    // body (canny_rows.hpp), the rest pixel by pixel below.
+    const std::uint8_t* const up = image.pixels + static_cast<std::size_t>(y - 1) * image.stride + base;
+    const canny_rows::DecisionRow decision{rows[0], rows[1], rows[2], up, up + image.stride, up + 2 * image.stride,
+                                           low, high};
+    std::int64_t x = xb;
+    for (std::size_t done = 1; done > 0 && x < xe; x += static_cast<std::int64_t>(done)) {
+      const auto begin = static_cast<std::size_t>(x - base), end = static_cast<std::size_t>(xe - base);
+      std::uint64_t kept = canny_rows::decide(decision, begin, end, done);
+      for (; kept != 0; kept &= kept - 1) emit(out, count, window, x + std::countr_zero(kept), y);
+    }
+    for (; x < xe; ++x) {
       const std::int64_t c = x - base;
       const std::uint16_t m = rows[1][c];
       if (m < low) continue;
@@ -333,6 +345,8 @@ Status extract_canny(const ImageView& image, const ImageWindow& window, std::uin
   }
   return Status::kOk;
 }
+
+const char* canny_vector_body() noexcept { return canny_rows::vector_target(); }
 
 Status extract_features(const ImageView& image, const ImageWindow& window, table_format::DetectorKind kind,
                         std::uint16_t threshold, std::span<RoiPoint> out, FeatureCount& count,

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <string>
 #include <vector>
 
 #include "gabarit/app/image_io.hpp"
@@ -159,7 +160,9 @@ TEST(Canny, WeakEdgesSurviveOnlyNextToStrongOnes) {
   EXPECT_EQ(extract_features(weak.view(), {0, 0, 20, 12}, table_format::DetectorKind::kCanny, 300, out, n), Status::kOk);
 }
 
-// The rows of magnitudes are an optimisation only: on noisy images of awkward
+// The rows of magnitudes, and the vector bodies that decide whole vectors of
+// a row where the build has them (kernel/src/canny_rows.hpp: AVX2 or SSE4 on
+// x86-64, NEON on AArch64), are optimisations only: on noisy images of awkward
 // sizes, windows that leave the image and feature buffers that overflow, the
 // features, their order and the dropped count are the per-pixel path's.
 TEST(Canny, RowsOfMagnitudesGiveTheReferenceFeaturesBitForBit) {
@@ -168,7 +171,9 @@ TEST(Canny, RowsOfMagnitudesGiveTheReferenceFeaturesBitForBit) {
     state = state * 1664525u + 1013904223u;
     return state >> 24;
   };
-  const std::uint32_t sizes[][2] = {{3, 3}, {1, 9}, {9, 1}, {4, 5}, {37, 23}, {131, 7}, {64, 64}};
+  // Wider than 64 columns (the vector bodies decide up to 64 at a time) and
+  // not a whole number of vectors of any width (canny_rows.hpp).
+  const std::uint32_t sizes[][2] = {{3, 3}, {1, 9}, {9, 1}, {4, 5}, {37, 23}, {131, 7}, {64, 64}, {203, 11}};
   std::size_t compared = 0, features_seen = 0;
   for (const auto& size : sizes) {
     GrayImage img(size[0], size[1]);
@@ -207,8 +212,19 @@ TEST(Canny, RowsOfMagnitudesGiveTheReferenceFeaturesBitForBit) {
       }
     }
   }
-  EXPECT_EQ(compared, 7u * 6u * 5u * 2u);
+  EXPECT_EQ(compared, 8u * 6u * 5u * 2u);
   EXPECT_GT(features_seen, 1000u) << "the images must have edges for the comparison to mean something";
+}
+
+// Which body decides the rows is reported by name; where the build made
+// vector bodies (x86-64 and AArch64 with Google Highway) the CPUs CI runs on
+// get one, so a build that silently lost them fails here.
+TEST(Canny, TheVectorBodyIsNamedAndUsedWhereBuilt) {
+  const std::string body = canny_vector_body();
+  EXPECT_TRUE(body == "AVX2" || body == "SSE4" || body == "NEON" || body == "scalar") << body;
+#if defined(GABARIT_EXPECT_CANNY_VECTOR_BODY)
+  EXPECT_NE(body, "scalar");
+#endif
 }
 
 // A turned rectangle to keep (a tracker's rotated ROI): of each row only the

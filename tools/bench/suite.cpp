@@ -15,6 +15,7 @@
 #include "gabarit/app/evaluation.hpp"
 #include "gabarit/host/tables/model.hpp"
 #include "gabarit/app/particle_run.hpp"
+#include "gabarit/features.hpp"
 #include "gabarit/host/scenes/scene_synth.hpp"
 #include "gabarit/host/tables/table_builder.hpp"
 #include "gabarit/host/runs/tracking_run.hpp"
@@ -526,7 +527,9 @@ int run_suite(const SuiteOptions& o) {
      << (o.orientation_channels ? ", " + std::to_string(o.orientation_channels) + " orientation channels" : std::string()) << "). "
         "Accuracy over the visible frames; depth only on tilted stacks (distinguishable depths); 'reacquired' is the "
         "worst number of frames after an occlusion until the pose is within 2 px again ('in reach': over the occlusions "
-        "after which the target reappears within the recovery grid's reach of where it was last seen; '-': none). One thread.\n\n";
+        "after which the target reappears within the recovery grid's reach of where it was last seen; '-': none). One thread; "
+        "the Canny rows decided by the "
+     << canny_vector_body() << " body.\n\n";
   std::vector<SceneResult> tuning, held_out;
   for (const SceneResult& r : results) (r.held_out ? held_out : tuning).push_back(r);
   md << "## Summary\n\n";

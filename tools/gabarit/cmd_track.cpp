@@ -14,6 +14,7 @@
 #include "gabarit/app/particle_run.hpp"
 #include "gabarit/app/scratch.hpp"
 #include "gabarit/app/session_profile_io.hpp"
+#include "gabarit/features.hpp"
 #include "gabarit/host/runs/detection_run.hpp"
 #include "gabarit/host/runs/tracking_run.hpp"
 
@@ -183,6 +184,7 @@ void report(const app::Args& args, const TableView& table, const TrackTally& tal
           << ", \"p99\": " << t.p99 << ", \"max\": " << t.max << "},\n  \"features_per_frame\": " << tally.features / n
           << ",\n  \"votes_per_frame\": " << tally.votes / n << ",\n  \"features_dropped\": " << tally.dropped
           << ",\n  \"lost_frames\": " << tally.lost << ",\n  \"uncertain_frames\": " << tally.uncertain
+          << ",\n  \"canny_vector_body\": \"" << canny_vector_body() << "\""
           << ",\n  \"table_bytes\": " << table.size_bytes() << ",\n  \"cells\": " << table.cell_count()
           << ",\n  \"ledger\": " << ledger_json(tally, n) << "\n}\n";
     app::write_file(args.get("--stats"), stats.str());

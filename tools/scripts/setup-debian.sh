@@ -7,6 +7,7 @@ packages=(
   universal-ctags         # tests/function_length_check.py: function extents
   googletest libgtest-dev
   libeigen3-dev           # the kernel's motion filter (fixed-size Eigen, headers only)
+  libhwy-dev              # Google Highway: the kernel's vector feature extraction (headers only)
   g++-aarch64-linux-gnu g++-arm-linux-gnueabihf qemu-user qemu-system-arm
   gcc-arm-none-eabi libnewlib-arm-none-eabi libstdc++-arm-none-eabi-newlib
   libopencv-imgproc-dev   # gabarit bench's peer (matchTemplate); never linked into the tracker

@@ -86,7 +86,9 @@ Status extract_gradient_rows(const ImageView& image, const ImageWindow& window, 
 // times (its own, two across the edge, eight for the hysteresis). Given
 // canny_scratch_entries(window.width) entries of `magnitude_rows`, it keeps
 // three rows of magnitudes and computes each pixel's once; the features are
-// the same with or without them (the per-pixel path is the reference).
+// the same with or without them (the per-pixel path is the reference). With
+// them, where the build has vector bodies for this CPU, whole vectors of a
+// row are decided at once, with the same features (canny_vector_body).
 constexpr std::size_t canny_scratch_entries(std::uint16_t window_width) noexcept {
   return 3 * (std::size_t{window_width} + 2);
 }
@@ -110,6 +112,11 @@ Status extract_binary(const ImageView& image, const ImageWindow& window, std::sp
 Status extract_canny(const ImageView& image, const ImageWindow& window, std::uint16_t threshold, std::span<RoiPoint> out,
                      FeatureCount& count, std::span<std::uint16_t> magnitude_rows = {},
                      const TurnedRectangle* keep = nullptr) noexcept;
+
+// The body that decides Canny's rows of magnitudes on this CPU: "AVX2" or
+// "SSE4" (x86-64), "NEON" (AArch64), or "scalar" (other targets, builds
+// without Google Highway, or a CPU without the instructions).
+[[nodiscard]] const char* canny_vector_body() noexcept;
 
 // Dispatches on the detector recorded in a table; magnitude_rows and keep as extract_canny's.
 Status extract_features(const ImageView& image, const ImageWindow& window, table_format::DetectorKind kind,
