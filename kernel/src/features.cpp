@@ -327,8 +327,13 @@ Status extract_canny(const ImageView& image, const ImageWindow& window, std::uin
     std::int64_t x = xb;
     for (std::size_t done = 1; done > 0 && x < xe; x += static_cast<std::int64_t>(done)) {
       const auto begin = static_cast<std::size_t>(x - base), end = static_cast<std::size_t>(xe - base);
-      std::uint64_t kept = canny_rows::decide(decision, begin, end, done);
-      for (; kept != 0; kept &= kept - 1) emit(out, count, window, x + std::countr_zero(kept), y);
+      const std::uint64_t kept = canny_rows::decide(decision, begin, end, done);
+      // 32 bits at a time: a 64-bit count of trailing zeros is a libgcc call
+      // on 32-bit targets (__ctzdi2), which the firmware's stack analysis cannot see into.
+      for (std::int64_t half = 0; half < 2; ++half) {
+        for (auto bits = static_cast<std::uint32_t>(kept >> (32 * half)); bits != 0; bits &= bits - 1)
+          emit(out, count, window, x + 32 * half + std::countr_zero(bits), y);
+      }
     }
     for (; x < xe; ++x) {
       const std::int64_t c = x - base;
