@@ -3,11 +3,11 @@
 // and the target has a SIMD unit worth it) the vector bodies are compiled:
 // on x86-64 for AVX2 and SSE4, chosen at run time from the CPU (the
 // baseline x86-64 has neither, and a binary must still run there: the
-// scalar body then); on AArch64 for NEON, which every AArch64 core has.
-// Highway is used header-only, its dispatch table left out, so the static
-// library needs no libhwy at link time; the choice is one check of the CPU
-// flags GCC's runtime reads once at start-up.
+// scalar body then); on AArch64 for NEON, which every AArch64 core has
+// (vector_body.hpp chooses). Highway is used header-only, its dispatch table
+// left out, so the static library needs no libhwy at link time.
 #include "canny_rows.hpp"
+#include "vector_body.hpp"
 
 #if defined(GABARIT_HIGHWAY)
 // Highway's debug checks call hwy::Abort, which lives in libhwy.
@@ -152,39 +152,15 @@ void sobel_magnitudes_scalar(const std::uint8_t* up, const std::uint8_t* mid, co
   }
 }
 
-namespace {
-enum class Body { kScalar, kSse4, kAvx2, kNeon };
-
-Body body() noexcept {
-#if defined(GABARIT_HIGHWAY) && defined(__x86_64__)
-  // Highway compiles each target for all that its name implies (SSE4 with
-  // PCLMUL and AES; AVX2 with those, BMI1/2, FMA and F16C), so the CPU must
-  // have all of it. F16C, which clang 14 cannot ask for, came before AVX2 on
-  // Intel's and AMD's cores alike.
-  const bool sse4 =
-      __builtin_cpu_supports("sse4.2") && __builtin_cpu_supports("pclmul") && __builtin_cpu_supports("aes");
-  if (sse4 && __builtin_cpu_supports("avx2") && __builtin_cpu_supports("bmi") && __builtin_cpu_supports("bmi2") &&
-      __builtin_cpu_supports("fma"))
-    return Body::kAvx2;
-  if (sse4) return Body::kSse4;
-  return Body::kScalar;
-#elif defined(GABARIT_HIGHWAY) && HWY_TARGET == HWY_NEON
-  return Body::kNeon;
-#else
-  return Body::kScalar;
-#endif
-}
-}  // namespace
-
 void sobel_magnitudes(const std::uint8_t* up, const std::uint8_t* mid, const std::uint8_t* down, std::size_t count,
                       std::uint16_t* out) noexcept {
   std::size_t done = 0;
-  switch (body()) {
+  switch (vector_body()) {
 #if defined(GABARIT_HIGHWAY) && defined(__x86_64__)
-    case Body::kAvx2: done = N_AVX2::sobel_magnitudes_vector(up, mid, down, count, out); break;
-    case Body::kSse4: done = N_SSE4::sobel_magnitudes_vector(up, mid, down, count, out); break;
+    case VectorBody::kAvx2: done = N_AVX2::sobel_magnitudes_vector(up, mid, down, count, out); break;
+    case VectorBody::kSse4: done = N_SSE4::sobel_magnitudes_vector(up, mid, down, count, out); break;
 #elif defined(GABARIT_HIGHWAY) && HWY_TARGET == HWY_NEON
-    case Body::kNeon: done = N_NEON::sobel_magnitudes_vector(up, mid, down, count, out); break;
+    case VectorBody::kNeon: done = N_NEON::sobel_magnitudes_vector(up, mid, down, count, out); break;
 #endif
     default: break;
   }
@@ -195,26 +171,18 @@ std::uint64_t decide([[maybe_unused]] const DecisionRow& row, std::size_t begin,
                      std::size_t& done) noexcept {
   done = 0;
   if (begin >= end) return 0;
-  switch (body()) {
+  switch (vector_body()) {
 #if defined(GABARIT_HIGHWAY) && defined(__x86_64__)
-    case Body::kAvx2: return N_AVX2::decide_vector(row, begin, end, done);
-    case Body::kSse4: return N_SSE4::decide_vector(row, begin, end, done);
+    case VectorBody::kAvx2: return N_AVX2::decide_vector(row, begin, end, done);
+    case VectorBody::kSse4: return N_SSE4::decide_vector(row, begin, end, done);
 #elif defined(GABARIT_HIGHWAY) && HWY_TARGET == HWY_NEON
-    case Body::kNeon: return N_NEON::decide_vector(row, begin, end, done);
+    case VectorBody::kNeon: return N_NEON::decide_vector(row, begin, end, done);
 #endif
     default: return 0;
   }
 }
 
-const char* vector_target() noexcept {
-  switch (body()) {
-    case Body::kAvx2: return "AVX2";
-    case Body::kSse4: return "SSE4";
-    case Body::kNeon: return "NEON";
-    case Body::kScalar: break;
-  }
-  return "scalar";
-}
+const char* vector_target() noexcept { return vector_body_name(vector_body()); }
 
 }  // namespace gabarit::canny_rows
 #endif

@@ -1,17 +1,12 @@
 #include "gabarit/dense_voter.hpp"
 
+#include "dense_lanes.hpp"
+
 namespace gabarit {
 namespace {
 
-constexpr std::size_t kPlanes = 16;
+using dense_lanes::kPlanes;
 constexpr std::uint32_t kBlock = 65535;  // features per block: counts fit 16 planes
-
-// Carry-save adder: (high, low) = a + b + c, bitwise.
-inline void csa(std::uint64_t& high, std::uint64_t& low, std::uint64_t a, std::uint64_t b, std::uint64_t c) noexcept {
-  const std::uint64_t u = a ^ b;
-  high = (a & b) | (u & c);
-  low = u ^ c;
-}
 
 // Bit-sliced counters for W words of cells. Layout of scratch:
 // planes[kPlanes][W], ones[W], twos[W], fours[W].
@@ -22,19 +17,9 @@ class SlicedCounters {
     for (std::size_t i = 0; i < 19 * words; ++i) scratch[i] = 0;
   }
 
-  // Adds eight masks (each `words_` words).
-  void add8(const std::uint64_t* const m[8]) noexcept {
-    for (std::size_t w = 0; w < words_; ++w) {
-      std::uint64_t twos_a, twos_b, fours_a, fours_b, eights;
-      csa(twos_a, ones_[w], ones_[w], m[0][w], m[1][w]);
-      csa(twos_b, ones_[w], ones_[w], m[2][w], m[3][w]);
-      csa(fours_a, twos_[w], twos_[w], twos_a, twos_b);
-      csa(twos_a, ones_[w], ones_[w], m[4][w], m[5][w]);
-      csa(twos_b, ones_[w], ones_[w], m[6][w], m[7][w]);
-      csa(fours_b, twos_[w], twos_[w], twos_a, twos_b);
-      csa(eights, fours_[w], fours_[w], fours_a, fours_b);
-      ripple(w, eights, 3);
-    }
+  // Adds eight masks (each `words_` words) with `body` (dense_lanes.hpp).
+  void add8(const std::uint64_t* const m[8], VectorBody body) noexcept {
+    dense_lanes::add8(dense_lanes::SlicedWords{planes_, ones_, twos_, fours_, words_}, m, body);
   }
 
   void add1(const std::uint64_t* m) noexcept {
@@ -132,6 +117,7 @@ Status accumulate_votes_dense(const TableView& table, std::span<const std::uint6
     return masks.data() + std::size_t{(item & 1) ? s.second : s.first} * words;
   };
   SlicedCounters sliced(scratch, words);
+  const VectorBody body = vector_body();
   std::uint64_t votes = 0;
   for (std::size_t start = 0; start < items; start += kBlock) {
     const std::size_t end = start + kBlock < items ? start + kBlock : items;
@@ -139,7 +125,7 @@ Status accumulate_votes_dense(const TableView& table, std::span<const std::uint6
     for (; i + 8 <= end; i += 8) {
       const std::uint64_t* m[8];
       for (int k = 0; k < 8; ++k) m[k] = mask_of(i + static_cast<std::size_t>(k));
-      sliced.add8(m);
+      sliced.add8(m, body);
     }
     for (; i < end; ++i) sliced.add1(mask_of(i));
     votes += sliced.flush(counters);

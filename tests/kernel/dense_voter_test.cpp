@@ -8,7 +8,9 @@
 
 #include <vector>
 
+#include "../../kernel/src/dense_lanes.hpp"
 #include "gabarit/app/image_io.hpp"
+#include "gabarit/features.hpp"
 #include "gabarit/tracker.hpp"
 #include "test_tables.hpp"
 
@@ -23,10 +25,12 @@ struct Dense {
   std::vector<std::uint64_t> masks, scratch;
 };
 
-// x cells, y cells -> cell counts 1, 63, 64, 65, 121, 128, 129, 1024.
+// x cells, y cells -> cell counts 1, 63, 64, 65, 121, 128, 129, 1024, and
+// 289, 441 and 841 (5, 7 and 14 words: a vector body's tails).
 const std::pair<const char*, const char*> kSpaces[] = {
-    {"0:0:1", "0:0:1"}, {"-31:31:63", "0:0:1"}, {"-31.5:31.5:64", "0:0:1"}, {"-32:32:65", "0:0:1"},
-    {"-5:5:11", "-5:5:11"}, {"-8:7:16", "-4:3:8"}, {"-64:64:129", "0:0:1"}, {"-16:15:32", "-16:15:32"},
+    {"0:0:1", "0:0:1"},     {"-31:31:63", "0:0:1"}, {"-31.5:31.5:64", "0:0:1"}, {"-32:32:65", "0:0:1"},
+    {"-5:5:11", "-5:5:11"}, {"-8:7:16", "-4:3:8"},  {"-64:64:129", "0:0:1"},    {"-16:15:32", "-16:15:32"},
+    {"-8:8:17", "-8:8:17"}, {"-10:10:21", "-10:10:21"}, {"-14:14:29", "-14:14:29"},
 };
 
 TEST(DenseVoter, MatchesTheCsrVoterBitForBit) {
@@ -50,6 +54,45 @@ TEST(DenseVoter, MatchesTheCsrVoterBitForBit) {
       EXPECT_EQ(ta.features, tb.features);
     }
   }
+}
+
+// Each vector body this build has and this CPU runs (kernel/src/
+// vector_body.hpp), against the scalar body, on every width from 1 to 17
+// words: whole vectors, AVX2's half vector and a scalar tail. The counters
+// start random, so that carries ripple through every plane and past the
+// last, and some masks are all ones.
+TEST(DenseVoter, EveryBodyAddsMasksLikeTheScalarBody) {
+  app::Rng rng(77);
+  const auto word = [&rng] { return std::uint64_t{rng.next_u32()} << 32 | rng.next_u32(); };
+  std::uint32_t bodies_compared = 0;
+  for (const VectorBody body : {VectorBody::kSse4, VectorBody::kAvx2, VectorBody::kNeon}) {
+    if (!vector_body_runs(body)) continue;
+    ++bodies_compared;
+    for (std::size_t words = 1; words <= 17; ++words) {
+      std::vector<std::uint64_t> state((dense_lanes::kPlanes + 3) * words);
+      for (auto& w : state) w = word();
+      std::vector<std::uint64_t> vector_state = state;
+      const auto view = [words](std::vector<std::uint64_t>& s) {
+        std::uint64_t* planes = s.data();
+        std::uint64_t* ones = planes + dense_lanes::kPlanes * words;
+        return dense_lanes::SlicedWords{planes, ones, ones + words, ones + 2 * words, words};
+      };
+      for (int round = 0; round < 40; ++round) {
+        std::vector<std::uint64_t> masks(8 * words);
+        for (auto& m : masks) m = round % 5 == 0 ? ~std::uint64_t{0} : word();
+        const std::uint64_t* m[8];
+        for (std::size_t k = 0; k < 8; ++k) m[k] = masks.data() + k * words;
+        dense_lanes::add8(view(state), m, VectorBody::kScalar);
+        dense_lanes::add8(view(vector_state), m, body);
+        ASSERT_EQ(state, vector_state) << vector_body_name(body) << ", " << words << " words, round " << round;
+      }
+    }
+  }
+  // Where the build made vector bodies, the CPUs CI runs on have one.
+#if defined(GABARIT_EXPECT_CANNY_VECTOR_BODY)
+  EXPECT_GT(bodies_compared, 0u);
+#endif
+  EXPECT_STREQ(vector_body_name(vector_body()), canny_vector_body()) << "the Canny rows and the voter run one body";
 }
 
 TEST(DenseVoter, SaturatesLikeTheCsrVoterAcrossBlocks) {

@@ -3,7 +3,9 @@
 // dense_words_per_pixel(cells) 64-bit words, and a frame's votes accumulate in
 // bit-sliced counters — bit plane b holds bit b of every cell's count — fed
 // through carry-save adders, eight masks at a time (Harley-Seal). There is no
-// branch per feature and no read-modify-write per reference.
+// branch per feature and no read-modify-write per reference. Where the build
+// has Google Highway, the adders run over 2 (SSE4, NEON) or 4 (AVX2) words
+// at once (kernel/src/dense_lanes.cpp), with the same counters.
 //
 // Results are bit-identical to accumulate_votes (the CSR voter), including
 // saturation: features are taken in blocks of at most 65535, whose counts
@@ -49,6 +51,11 @@ constexpr std::size_t dense_scratch_words(std::uint32_t cells) noexcept { return
 // compact ones expanded once, as hosted programs do): it picks the faster
 // voter in 19 of those 20 cases and costs 10% over always picking the
 // faster. Both voters give the same counters: a wrong guess costs time only.
+// Fitted with the scalar body: the vector bodies take about half the dense
+// voter's time on the scene suite's 847-cell tables (docs/performance.md,
+// "The dense voter in vector lanes"), so on those builds the model picks
+// the CSR voter for some tables where dense would now be faster (few
+// references per pixel, as decimated tables have); not refitted.
 constexpr bool dense_voter_pays_off(std::uint32_t cells, std::uint32_t roi_pixels, std::uint32_t references) noexcept {
   if (cells == 0 || cells > kDenseMaxCells || roi_pixels == 0) return false;
   const std::uint64_t words = dense_words_per_pixel(cells);
