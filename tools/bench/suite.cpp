@@ -528,7 +528,7 @@ int run_suite(const SuiteOptions& o) {
         "Accuracy over the visible frames; depth only on tilted stacks (distinguishable depths); 'reacquired' is the "
         "worst number of frames after an occlusion until the pose is within 2 px again ('in reach': over the occlusions "
         "after which the target reappears within the recovery grid's reach of where it was last seen; '-': none). One thread; "
-        "the Canny rows decided by the "
+        "the Canny rows and the dense voter's adders run the "
      << canny_vector_body() << " body.\n\n";
   std::vector<SceneResult> tuning, held_out;
   for (const SceneResult& r : results) (r.held_out ? held_out : tuning).push_back(r);

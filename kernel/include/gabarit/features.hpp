@@ -115,7 +115,8 @@ Status extract_canny(const ImageView& image, const ImageWindow& window, std::uin
 
 // The body that decides Canny's rows of magnitudes on this CPU: "AVX2" or
 // "SSE4" (x86-64), "NEON" (AArch64), or "scalar" (other targets, builds
-// without Google Highway, or a CPU without the instructions).
+// without Google Highway, or a CPU without the instructions). The dense
+// voter's adders run the same body (dense_voter.hpp).
 [[nodiscard]] const char* canny_vector_body() noexcept;
 
 // Dispatches on the detector recorded in a table; magnitude_rows and keep as extract_canny's.
