@@ -10,13 +10,7 @@
 #include "vector_body.hpp"
 
 #if defined(GABARIT_HIGHWAY)
-// Highway's debug checks call hwy::Abort, which lives in libhwy.
-#define HWY_IS_DEBUG_BUILD 0
-#if defined(__x86_64__)
-#define HWY_TARGETS (HWY_AVX2 | HWY_SSE4)
-#else
-#define HWY_TARGETS HWY_STATIC_TARGET  // NEON on AArch64; no SVE build
-#endif
+#include "highway_targets.hpp"
 #undef HWY_TARGET_INCLUDE
 #define HWY_TARGET_INCLUDE "canny_rows.cpp"
 #include <hwy/foreach_target.h>  // re-includes this file once per target
